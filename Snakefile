@@ -1,0 +1,23 @@
+# ttbpipe: probabilistic dynamic assessment of railway train-track-bridge systems.
+#
+#   snakemake --cores 2                       # the default study (config/config.yaml)
+#   snakemake --cores 2 --configfile X.yaml   # another study
+#   snakemake --report results/report.html    # the report (after a run)
+#
+# Stages live in workflow/rules/*.smk; scripts in workflow/scripts are thin and call the package.
+
+from snakemake.utils import min_version
+
+min_version("8.0")
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/inspections.smk"
+
+
+rule all:
+    input:
+        all_targets(),
+    default_target: True

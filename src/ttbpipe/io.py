@@ -1,0 +1,126 @@
+"""Table and file input/output with provenance and atomic writes.
+
+Every table ttbpipe writes goes through :func:`write_table`, which
+
+* writes to a temporary file in the destination folder and renames it into place, so that an
+  interrupted job never leaves a partial output behind;
+* stores, in the Parquet schema metadata under the key ``ttbpipe``, a JSON document with the
+  ttbpipe version, the resolved configuration that produced the table, the table's kind and any
+  extra fields the caller passes.
+
+:func:`read_provenance` reads that document back.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Iterator, Mapping
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from . import __version__
+
+PROVENANCE_KEY = b"ttbpipe"
+
+
+def _jsonable(obj: Any) -> Any:
+    """Convert numpy scalars/arrays and paths so that ``json.dumps`` accepts them."""
+    if isinstance(obj, Mapping):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def provenance(config: Mapping[str, Any] | None = None, kind: str | None = None,
+               **extra: Any) -> dict[str, Any]:
+    """Return the provenance document stored with every table."""
+    doc: dict[str, Any] = {
+        "ttbpipe_version": __version__,
+        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "kind": kind,
+        "config": _jsonable(dict(config)) if config is not None else None,
+    }
+    doc.update(_jsonable(extra))
+    return doc
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only on success.
+
+    The temporary file lives in the destination folder so that the final ``os.replace`` is an
+    atomic rename on the same file system. On any exception the temporary file is removed and the
+    destination is left untouched.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        raise
+
+
+def write_table(df: pd.DataFrame, path: str | os.PathLike[str], *,
+                config: Mapping[str, Any] | None = None, kind: str | None = None,
+                **extra: Any) -> Path:
+    """Write ``df`` to Parquet atomically, with the provenance document in its metadata."""
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    meta = dict(table.schema.metadata or {})
+    meta[PROVENANCE_KEY] = json.dumps(provenance(config, kind, **extra)).encode()
+    table = table.replace_schema_metadata(meta)
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        pq.write_table(table, tmp)
+    return path
+
+
+def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read a Parquet table written by :func:`write_table`."""
+    return pq.read_table(path).to_pandas()
+
+
+def read_provenance(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Return the provenance document of a table written by :func:`write_table`."""
+    meta = pq.read_schema(path).metadata or {}
+    if PROVENANCE_KEY not in meta:
+        raise KeyError(f"{path}: no ttbpipe provenance in the Parquet metadata")
+    return json.loads(meta[PROVENANCE_KEY])
+
+
+def write_text(text: str, path: str | os.PathLike[str]) -> Path:
+    """Write a text file atomically."""
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    return path
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], **kwargs: Any) -> Path:
+    """Save a matplotlib figure atomically (format from the destination's suffix)."""
+    path = Path(path)
+    kwargs.setdefault("dpi", 150)
+    kwargs.setdefault("bbox_inches", "tight")
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", **kwargs)
+    return path

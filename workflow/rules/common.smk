@@ -1,0 +1,90 @@
+# Configuration validation, campaign discovery and input functions shared by all stages.
+
+import datetime as _dt
+import re
+from pathlib import Path
+
+from snakemake.utils import validate
+
+import ttbpipe
+
+validate(config, schema="../schemas/config.schema.yaml")
+
+# Package code under src/ is not tracked by Snakemake for reruns: every rule passes this through
+# `params:` so that a new ttbpipe version reruns what it made.
+MODEL_VERSION = ttbpipe.__version__
+
+DATE_PATTERN = r"\d{4}-\d{2}-\d{2}"
+CAMPAIGN_FILE = re.compile(rf"^({DATE_PATTERN})\.(csv|parquet)$")
+
+wildcard_constraints:
+    date=DATE_PATTERN,
+
+
+def _add_months(date: _dt.date, months: int) -> _dt.date:
+    """Same day of month `months` later (clamped to the month's last day)."""
+    import calendar
+
+    month_index = date.month - 1 + months
+    year, month = date.year + month_index // 12, month_index % 12 + 1
+    day = min(date.day, calendar.monthrange(year, month)[1])
+    return _dt.date(year, month, day)
+
+
+def synthetic_dates() -> list[str]:
+    """Dates of the synthetic default campaigns, when the configuration asks for them."""
+    syn = config["inspections"].get("synthetic", {})
+    if not syn.get("enabled", False):
+        return []
+    start = _dt.date.fromisoformat(syn["start_date"])
+    return [
+        _add_months(start, k * syn["interval_months"]).isoformat()
+        for k in range(syn["campaigns"])
+    ]
+
+
+def discover_campaigns() -> dict[str, str]:
+    """Map campaign date -> file, from the user folder and the synthetic series."""
+    campaigns: dict[str, str] = {}
+    folder = Path(config["inspections"]["directory"])
+    if folder.is_dir():
+        for path in sorted(folder.iterdir()):
+            match = CAMPAIGN_FILE.match(path.name)
+            if not match:
+                continue
+            date = match.group(1)
+            if date in campaigns:
+                raise WorkflowError(
+                    f"two inspection files for campaign {date}: {campaigns[date]} and {path}; "
+                    "keep one of them"
+                )
+            campaigns[date] = str(path)
+    syn = config["inspections"].get("synthetic", {})
+    for date in synthetic_dates():
+        path = str(Path(syn["directory"]) / f"{date}.parquet")
+        if date in campaigns:
+            raise WorkflowError(
+                f"campaign {date} is both a file of yours ({campaigns[date]}) and a synthetic "
+                "campaign; disable inspections.synthetic or rename your file"
+            )
+        campaigns[date] = path
+    if not campaigns:
+        raise WorkflowError(
+            f"no inspection campaigns: put YYYY-MM-DD.csv or .parquet files in {folder} "
+            "or set inspections.synthetic.enabled: true"
+        )
+    return dict(sorted(campaigns.items()))
+
+
+CAMPAIGNS = discover_campaigns()
+
+
+def campaign_file(wildcards) -> str:
+    return CAMPAIGNS[wildcards.date]
+
+
+def all_targets() -> list[str]:
+    """Every final output of the stages that exist."""
+    targets = ["results/figures/psd_vs_standard.png"]
+    targets += expand("results/psd/{date}.parquet", date=CAMPAIGNS)
+    return targets

@@ -1,0 +1,69 @@
+# Stage 1: inspection campaigns -> validated, cleaned tables -> per-section PSDs.
+
+
+rule synth_inspections:
+    """Write the synthetic default campaign series (the embedded default data)."""
+    output:
+        expand(
+            "{directory}/{date}.parquet",
+            directory=config["inspections"].get("synthetic", {}).get("directory", "resources/inspections/synthetic"),
+            date=synthetic_dates(),
+        ),
+    params:
+        synthetic=config["inspections"].get("synthetic", {}),
+        dates=synthetic_dates(),
+        version=MODEL_VERSION,
+    log:
+        "logs/inspections/synth_inspections.log",
+    script:
+        "../scripts/synth_inspections.py"
+
+
+rule check_inspection:
+    """Validate one campaign file and apply the documented repairs."""
+    input:
+        campaign_file,
+    output:
+        clean="results/inspections/clean/{date}.parquet",
+        repairs="results/inspections/clean/{date}.repairs.json",
+    params:
+        cleaning=config["inspections"].get("cleaning", {}),
+        version=MODEL_VERSION,
+    log:
+        "logs/inspections/check/{date}.log",
+    script:
+        "../scripts/check_inspection.py"
+
+
+rule estimate_psd:
+    """Welch PSD per track section and channel of one cleaned campaign."""
+    input:
+        "results/inspections/clean/{date}.parquet",
+    output:
+        "results/psd/{date}.parquet",
+    params:
+        psd=config["psd"],
+        version=MODEL_VERSION,
+    log:
+        "logs/psd/{date}.log",
+    script:
+        "../scripts/estimate_psd.py"
+
+
+rule plot_psd_vs_standard:
+    """Estimated PSDs of all campaigns against the standard spectrum, per channel."""
+    input:
+        expand("results/psd/{date}.parquet", date=CAMPAIGNS),
+    output:
+        report(
+            "results/figures/psd_vs_standard.png",
+            caption="../report/psd_vs_standard.rst",
+            category="1. Track irregularity",
+        ),
+    params:
+        psd=config["psd"],
+        version=MODEL_VERSION,
+    log:
+        "logs/psd/plot_psd_vs_standard.log",
+    script:
+        "../scripts/plot_psd_vs_standard.py"
