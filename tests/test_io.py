@@ -1,0 +1,56 @@
+"""Provenance metadata and atomic writes (ttbpipe.io)."""
+
+import json
+import os
+
+import pandas as pd
+import pytest
+
+import ttbpipe
+from ttbpipe import io
+
+
+def test_write_table_carries_config_and_version(tmp_path):
+    df = pd.DataFrame({"chainage_m": [0.0, 0.25], "vertical_left_mm": [0.1, -0.2]})
+    config = {"study": {"seed": 3}, "psd": {"section_length_m": 1000.0}}
+    path = io.write_table(df, tmp_path / "t.parquet", config=config, kind="test", campaign="2024-01-01")
+    doc = io.read_provenance(path)
+    assert doc["ttbpipe_version"] == ttbpipe.__version__
+    assert doc["config"] == config
+    assert doc["kind"] == "test" and doc["campaign"] == "2024-01-01"
+    pd.testing.assert_frame_equal(io.read_table(path), df)
+
+
+def test_failed_write_leaves_no_partial_output(tmp_path):
+    target = tmp_path / "out.parquet"
+    with pytest.raises(RuntimeError):
+        with io.atomic_path(target) as tmp:
+            tmp.write_text("half a table")
+            raise RuntimeError("killed mid-write")
+    assert not target.exists()
+    assert os.listdir(tmp_path) == []  # the temporary file is gone too
+
+
+def test_failed_write_keeps_previous_version(tmp_path):
+    target = tmp_path / "out.txt"
+    io.write_text("old", target)
+    with pytest.raises(ValueError):
+        with io.atomic_path(target) as tmp:
+            tmp.write_text("new but broken")
+            raise ValueError
+    assert target.read_text() == "old"
+
+
+def test_provenance_is_json_for_numpy_values(tmp_path):
+    import numpy as np
+    df = pd.DataFrame({"a": [1]})
+    path = io.write_table(df, tmp_path / "n.parquet", config={"x": np.float64(1.5), "v": np.arange(3)})
+    assert io.read_provenance(path)["config"] == {"x": 1.5, "v": [0, 1, 2]}
+    json.dumps(io.read_provenance(path))
+
+
+def test_missing_provenance_is_reported(tmp_path):
+    path = tmp_path / "plain.parquet"
+    pd.DataFrame({"a": [1]}).to_parquet(path)
+    with pytest.raises(KeyError, match="no ttbpipe provenance"):
+        io.read_provenance(path)
