@@ -87,4 +87,5 @@ def all_targets() -> list[str]:
     """Every final output of the stages that exist."""
     targets = ["results/figures/psd_vs_standard.png"]
     targets += expand("results/psd/{date}.parquet", date=CAMPAIGNS)
+    targets.append("results/fields/samples.parquet")
     return targets

@@ -1,0 +1,667 @@
+"""Coupled train-track-bridge time integration: 35-DOF cars, 3-D wheel-rail contact, structure.
+
+One ``@njit`` loop advances the vehicle and the structure together with Zhai's explicit two-step
+scheme (same dt; physics.md section 5) and computes the wheel-rail contact forces at every step
+from the wheel and rail kinematics plus the track irregularities (seed paper sections 2.2.11,
+eqs. 28-31). ``track: rigid`` runs the same loop on rails fixed in space (irregularities only).
+
+Entry point: :func:`run_coupled` (case configuration dict -> time histories, summary).
+
+Case configuration (all sections optional; SI units unless the key says otherwise)::
+
+    train:        see ttbpipe.vehicle.parameters.train_from_config (+ speed_kmh)
+    structure:    the structure owner's section (ttbpipe.structure.build_structure)
+    simulation:
+      track: structure | rigid          # default: structure
+      speed_kmh: 300                    # or train.speed_kmh
+      time_step_s: 1.0e-4
+      output_interval_s: 1.0e-3
+      start_x_m: null                   # leading wheelset at t=0 (default: rear wheelset 5 m
+                                        #  inside the rails)
+      end_x_m: null                     # leading wheelset at the end (default: 5 m before the
+                                        #  rails end); rigid track: start 0, end = start + length
+      rigid_length_m: 200               # rigid track only: run length of the leading wheelset
+      margin_m: 5
+    irregularity:
+      source: synthetic | file | none   # default synthetic
+      spectrum: tbt3352                 # synthetic: any name of ttbpipe.irregularity.spectra
+      seed: 1
+      dx_m: 0.25
+      file: path.parquet                # file: chainage_m + vertical_mm, alignment_mm,
+                                        #  cross_level_mm, gauge_mm (x = chainage_m)
+      scale: 1.0                        # multiplies all channels
+      fade_in_m: 20                     # raised-cosine fade-in ahead of the leading wheelset
+      channels: [vertical, alignment, cross_level, gauge]   # others set to zero
+    monitors: [...]                     # structure monitors (default: the structure's default)
+
+Irregularities: the four spectral channels become per-rail inputs with
+:func:`ttbpipe.channels.rails_from_spectral`; each wheel reads its rail's profile at its own x.
+The track is perfect behind the leading wheelset's start position and the irregularity fades in
+over ``fade_in_m`` ahead of it, so the gravity-loaded static state at t = 0 is exact and every
+wheel sees the same profile at the same x.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+from numba import njit
+
+from ..channels import rails_from_spectral
+from ..structure.kernels import (StructurePacked, _add_rail_point_force, _rail_point_kinematics,
+                                 _structure_accelerations, _zhai_predict)
+from ..vehicle.comfort import sperling_index
+from ..vehicle.contact import N_COLS, ContactGeometry, build_geometry
+from ..vehicle.kernels import N_WHEEL_OUT, _csr_matvec_sub, _train_contact
+from ..vehicle.model import (DOF_PER_CAR, PITCH, ROLL, YAW, Y, Z, TrainModel, build_train_model)
+from ..vehicle.parameters import TrainParameters, train_from_config
+from ..vehicle.static import StructureStatic, solve_vehicle_static
+
+log = logging.getLogger(__name__)
+
+STATUS_MESSAGES = {
+    1: "non-finite state (numerical blow-up): reduce simulation.time_step_s (Zhai stability) or "
+       "check the irregularity amplitudes and contact parameters",
+    2: "every wheel lost contact with the rail at the same step: reduce simulation.time_step_s or "
+       "check the irregularity scale (mm vs m) and the wheel loads",
+    3: "vehicle displacement above 0.5 m (divergence): reduce simulation.time_step_s or check the "
+       "suspension parameters",
+}
+
+
+# ---------------------------------------------------------------------------------------------
+# kernels
+# ---------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _irregularity_at(irr, irr_slope, x0, dx, channel, x):
+    """Value and x-derivative of irregularity channel at x (linear interpolation; 0 outside)."""
+    s = (x - x0) / dx
+    n = irr.shape[1]
+    if s < 0.0 or s >= n - 1:
+        return 0.0, 0.0
+    i = int(s)
+    w = s - i
+    return (irr[channel, i] * (1.0 - w) + irr[channel, i + 1] * w,
+            irr_slope[channel, i] * (1.0 - w) + irr_slope[channel, i + 1] * w)
+
+
+@njit(cache=True)
+def _rail_kinematics(packed, disp, vel, ws_x, speed, head_height, irr, irr_slope, irr_x0, irr_dx,
+                     rail_kin):
+    """Rail-head z, dz/dt, y, dy/dt at every wheel: structure (shear centre moved to the head
+    by the roll, y_head = y - h roll) plus the irregularity of that rail (dz/dt = V dz/dx)."""
+    for w in range(ws_x.shape[0]):
+        x = ws_x[w]
+        for k in range(2):
+            z, vz, y, vy, r, vr = _rail_point_kinematics(packed, k, x, disp, vel)
+            zi, dzi = _irregularity_at(irr, irr_slope, irr_x0, irr_dx, k, x)
+            yi, dyi = _irregularity_at(irr, irr_slope, irr_x0, irr_dx, 2 + k, x)
+            rail_kin[w, k, 0] = z + zi
+            rail_kin[w, k, 1] = vz + speed * dzi
+            rail_kin[w, k, 2] = y - head_height * r + yi
+            rail_kin[w, k, 3] = vy - head_height * vr + speed * dyi
+
+
+@njit(cache=True)
+def _evaluate(t, q, v, a, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, c_val, f_const,
+              ws_dofs, ws_x0, speed, table, scal, head_height, irr, irr_slope, irr_x0, irr_dx,
+              packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh, wheel, row, tmp):
+    """Accelerations of vehicle and structure at time t for the current (q, v, disp, vel)."""
+    for w in range(ws_x.shape[0]):
+        ws_x[w] = ws_x0[w] + speed * t
+    _rail_kinematics(packed, disp, vel, ws_x, speed, head_height, irr, irr_slope, irr_x0, irr_dx,
+                     rail_kin)
+    for i in range(f_veh.shape[0]):
+        f_veh[i] = f_const[i]
+    _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, f_veh, wheel, row, tmp)
+    _csr_matvec_sub(k_ptr, k_idx, k_val, q, f_veh)
+    _csr_matvec_sub(c_ptr, c_idx, c_val, v, f_veh)
+    for i in range(f_veh.shape[0]):
+        a[i] = f_veh[i] * inv_mass[i]
+    for i in range(nodal_force.shape[0]):
+        nodal_force[i] = 0.0
+    for w in range(ws_x.shape[0]):
+        for k in range(2):
+            fy_rail = -wheel[w, k, 1]
+            _add_rail_point_force(packed, k, ws_x[w], -wheel[w, k, 2], fy_rail,
+                                  -head_height * fy_rail, nodal_force)
+    _structure_accelerations(packed, disp, vel, nodal_force, acc)
+
+
+@njit(cache=True)
+def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, c_val, f_const,
+                  ws_dofs, ws_x0, speed, table, scal, head_height,
+                  irr, irr_slope, irr_x0, irr_dx,
+                  packed, disp, vel, acc, acc_prev,
+                  mon_ptr, mon_dof, mon_coef, mon_qty, mon_scale,
+                  dt, n_steps, out_every,
+                  t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak):
+    """Zhai explicit integration of vehicle + structure; returns (status, step).
+
+    Outputs every ``out_every`` steps (row 0 = t 0): wheel_hist[row, ws, side] = (F_x, F_y, F_z,
+    y_rel); q_hist/a_hist vehicle displacements/accelerations; mon_hist monitor values (scaled).
+    Peaks over every step: wheel_peak[ws, side] = (max F_z, min F_z, max |F_y|, max |F_y|/F_z),
+    h_peak[ws] = max |F_y,left + F_y,right|, mon_peak[m] = max |monitor|.
+    Status 0 ok, 1 non-finite, 2 all wheels off the rail, 3 vehicle divergence.
+    """
+    n_ws = ws_dofs.shape[0]
+    n_v = q.shape[0]
+    ws_x = np.zeros(n_ws)
+    rail_kin = np.zeros((n_ws, 2, 4))
+    f_veh = np.zeros(n_v)
+    wheel = np.zeros((n_ws, 2, N_WHEEL_OUT))
+    row = np.zeros(N_COLS)
+    tmp = np.zeros(N_WHEEL_OUT)
+    nodal_force = np.zeros(disp.shape[0])
+    n_mon = mon_ptr.shape[0] - 1
+    _evaluate(0.0, q, v, a, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, c_val, f_const,
+              ws_dofs, ws_x0, speed, table, scal, head_height, irr, irr_slope, irr_x0, irr_dx,
+              packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh, wheel, row, tmp)
+    out_row = 0
+    for n in range(-1, n_steps):
+        if n >= 0:
+            psi = 0.0 if n == 0 else 0.5
+            _zhai_predict(q, v, a, a_prev, dt, psi, psi)
+            _zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
+            for i in range(n_v):
+                a_prev[i] = a[i]
+            for i in range(disp.shape[0]):
+                acc_prev[i] = acc[i]
+            _evaluate((n + 1) * dt, q, v, a, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, c_val,
+                      f_const, ws_dofs, ws_x0, speed, table, scal, head_height, irr, irr_slope,
+                      irr_x0, irr_dx, packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh,
+                      wheel, row, tmp)
+        # peaks at every step
+        in_contact = 0
+        for w in range(n_ws):
+            h = 0.0
+            for k in range(2):
+                fz = wheel[w, k, 2]
+                fy = wheel[w, k, 1]
+                h += fy
+                if wheel[w, k, 4] > 0.0:
+                    in_contact += 1
+                if fz > wheel_peak[w, k, 0]:
+                    wheel_peak[w, k, 0] = fz
+                if fz < wheel_peak[w, k, 1]:
+                    wheel_peak[w, k, 1] = fz
+                if abs(fy) > wheel_peak[w, k, 2]:
+                    wheel_peak[w, k, 2] = abs(fy)
+                if fz > 0.0:
+                    qp = abs(fy) / fz
+                    if qp > wheel_peak[w, k, 3]:
+                        wheel_peak[w, k, 3] = qp
+                elif abs(fy) > 0.0:
+                    wheel_peak[w, k, 3] = np.inf
+            if abs(h) > h_peak[w]:
+                h_peak[w] = abs(h)
+        if in_contact == 0:
+            return 2, n
+        for m in range(n_mon):
+            s = 0.0
+            for j in range(mon_ptr[m], mon_ptr[m + 1]):
+                d = mon_dof[j]
+                if mon_qty[m] == 0:
+                    s += mon_coef[j] * disp[d]
+                elif mon_qty[m] == 1:
+                    s += mon_coef[j] * vel[d]
+                else:
+                    s += mon_coef[j] * acc[d]
+            s *= mon_scale[m]
+            if abs(s) > mon_peak[m]:
+                mon_peak[m] = abs(s)
+            if (n + 1) % out_every == 0:
+                mon_hist[out_row, m] = s
+        if (n + 1) % out_every == 0:
+            t_out[out_row] = (n + 1) * dt
+            big = 0.0
+            for i in range(n_v):
+                q_hist[out_row, i] = q[i]
+                a_hist[out_row, i] = a[i]
+                if not np.isfinite(q[i]) or not np.isfinite(a[i]):
+                    return 1, n
+                if abs(q[i]) > big:
+                    big = abs(q[i])
+            for i in range(disp.shape[0]):
+                if not np.isfinite(disp[i]):
+                    return 1, n
+            if big > 0.5:
+                return 3, n
+            for w in range(n_ws):
+                for k in range(2):
+                    wheel_hist[out_row, w, k, 0] = wheel[w, k, 0]
+                    wheel_hist[out_row, w, k, 1] = wheel[w, k, 1]
+                    wheel_hist[out_row, w, k, 2] = wheel[w, k, 2]
+                    wheel_hist[out_row, w, k, 3] = wheel[w, k, 5]
+            out_row += 1
+    return 0, n_steps
+
+
+# ---------------------------------------------------------------------------------------------
+# set-up
+# ---------------------------------------------------------------------------------------------
+def rigid_packed() -> StructurePacked:
+    """An empty structure: rails fixed in space (``track: rigid``)."""
+    i0 = np.zeros(0, dtype=np.int64)
+    f0 = np.zeros(0)
+    return StructurePacked(
+        n_dof=0, n_diag=0, inv_mass=f0, beam_dof_a=i0, beam_dof_b=i0, beam_L=f0, beam_EIv=f0,
+        beam_EIl=f0, beam_GK=f0, link_ptr=np.zeros(1, dtype=np.int64), link_dof=i0, link_coef=f0,
+        link_k=f0, link_c=f0, span_dof0=i0, span_n=i0, span_mat0=i0, span_K=f0, span_C=f0,
+        span_Minv=f0, span_scratch=np.zeros(1), n_rails=0, rail_x0=0.0, rail_dx=1.0,
+        rail_n_nodes=0, rail_dof0=np.zeros(2, dtype=np.int64))
+
+
+@dataclass
+class Irregularity:
+    """Per-rail irregularity inputs (m) on a uniform grid: rows z_left, z_right, y_left, y_right."""
+
+    x0: float
+    dx: float
+    values: np.ndarray   # (4, n) m
+    slopes: np.ndarray   # (4, n) d/dx
+
+    @classmethod
+    def none(cls) -> "Irregularity":
+        return cls(0.0, 1.0, np.zeros((4, 2)), np.zeros((4, 2)))
+
+
+def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: float,
+                       x_fade_start: float) -> Irregularity:
+    """Irregularity inputs over [x_start, x_end] from the case's ``irregularity`` section."""
+    cfg = dict(cfg or {})
+    source = cfg.get("source", "synthetic")
+    if source == "none":
+        return Irregularity.none()
+    dx = float(cfg.get("dx_m", 0.25))
+    if source == "synthetic":
+        from ..irregularity.synthesis import synthesize_profiles
+        length = x_end - x_start + 2 * dx
+        prof = synthesize_profiles(cfg.get("spectrum", "tbt3352"), length, dx,
+                                   seed=int(cfg.get("seed", 1)))
+        chain = prof["chainage_m"].to_numpy(float) + x_start - dx
+    elif source == "file":
+        path = cfg.get("file")
+        if not path:
+            raise ValueError("irregularity.file: a Parquet/CSV path is required for source: file")
+        prof = pd.read_parquet(path) if str(path).endswith(".parquet") else pd.read_csv(path)
+        need = ["chainage_m", "vertical_mm", "alignment_mm", "cross_level_mm", "gauge_mm"]
+        missing = [c for c in need if c not in prof.columns]
+        if missing:
+            raise ValueError(f"{path}: missing column(s) {missing}")
+        for c in need:
+            bad = np.flatnonzero(~np.isfinite(prof[c].to_numpy(float)))
+            if bad.size:
+                raise ValueError(f"{path}: non-finite value in column {c} at row {bad[0]}")
+        chain = prof["chainage_m"].to_numpy(float)
+        steps = np.diff(chain)
+        if np.any(steps <= 0) or np.ptp(steps) > 1e-6 * steps.mean():
+            raise ValueError(f"{path}: chainage_m must be uniform and increasing")
+        dx = float(steps.mean())
+        if chain[0] > x_start or chain[-1] < x_end:
+            raise ValueError(f"{path}: chainage {chain[0]:.1f}-{chain[-1]:.1f} m does not cover the "
+                             f"wheel positions {x_start:.1f}-{x_end:.1f} m of this run")
+    else:
+        raise ValueError(f"irregularity.source: {source!r}; expected synthetic | file | none")
+    channels = cfg.get("channels", ["vertical", "alignment", "cross_level", "gauge"])
+    scale = float(cfg.get("scale", 1.0)) * 1e-3  # mm -> m
+    spec = {}
+    for ch in ("vertical", "alignment", "cross_level", "gauge"):
+        spec[ch] = prof[f"{ch}_mm"].to_numpy(float) * scale if ch in channels else np.zeros(len(prof))
+    rails = rails_from_spectral(spec["vertical"], spec["alignment"], spec["cross_level"], spec["gauge"])
+    values = np.vstack([rails["z_left"], rails["z_right"], rails["y_left"], rails["y_right"]])
+    fade = float(cfg.get("fade_in_m", 20.0))
+    s = np.clip((chain - x_fade_start) / max(fade, 1e-9), 0.0, 1.0)
+    window = 0.5 - 0.5 * np.cos(np.pi * s)
+    values = values * window
+    slopes = np.gradient(values, dx, axis=1)
+    return Irregularity(float(chain[0]), dx, np.ascontiguousarray(values), np.ascontiguousarray(slopes))
+
+
+def contact_time_step_limit(model: TrainModel, geom: ContactGeometry, speed: float,
+                            rail_node_mass: float | None) -> dict:
+    """Largest stable Zhai step from the wheel-rail contact (safety 0.9, omega dt <= 2).
+
+    * Hertz mode: linearised stiffness k_H = 1.5 P^(1/3)/G at twice the largest static wheel load
+      (dynamic peaks), between half a wheelset and the rail node mass (rigid track: half a
+      wheelset on a fixed rail): omega = sqrt(k_H (1/m_w + 1/m_r)).
+    * Creep damping: the longitudinal creep force damps the wheelset spin, c = 2 f11 r0^2 / V,
+      and the lateral creep force the lateral motion, c = 2 f22 / V; explicit stability needs
+      c dt / m <= 2.
+    """
+    p_max = 2.0 * float(model.static_wheel_load.max())
+    k_h = 1.5 * p_max ** (1.0 / 3.0) / geom.hertz_g
+    m_w = 0.5 * min(c.wheelset_mass for c in model.params.cars)
+    inv_m = 1.0 / m_w + (1.0 / rail_node_mass if rail_node_mass else 0.0)
+    omega = np.sqrt(k_h * inv_m)
+    dt_hertz = 0.9 * 2.0 / omega
+    # creep coefficients at the largest load (conservative)
+    tab = geom.table[geom.table.shape[0] // 2]
+    c = (3.0 * p_max * (1 - geom.poisson ** 2) / (2 * geom.youngs_modulus * tab[6])) ** (1 / 3)
+    ab = tab[4] * tab[5] * c * c
+    f11, f22 = geom.shear_modulus * ab * tab[7], geom.shear_modulus * ab * tab[8]
+    spin_inertia = min(c_.wheelset_spin_inertia for c_ in model.params.cars)
+    c_spin = 2 * f11 * geom.wheel_radius ** 2 / speed
+    c_lat = 2 * f22 / speed
+    dt_spin = 0.9 * 2.0 * spin_inertia / c_spin
+    dt_lat = 0.9 * 2.0 * 2 * m_w / c_lat
+    return {"dt_s": float(min(dt_hertz, dt_spin, dt_lat)), "dt_hertz_s": float(dt_hertz),
+            "dt_creep_spin_s": float(dt_spin), "dt_creep_lateral_s": float(dt_lat),
+            "hertz_stiffness_N_m": float(k_h)}
+
+
+def _wheel_labels(model: TrainModel) -> list[str]:
+    labels = []
+    for w in range(model.n_wheelsets):
+        c = int(model.wheelset_car[w])
+        j = w - int(np.flatnonzero(model.wheelset_car == c)[0]) + 1
+        labels.append(f"car{c + 1}_ws{j}")
+    return labels
+
+
+@dataclass
+class CoupledSetup:
+    """Everything the loop needs, built from a case configuration (exposed for tests)."""
+
+    train: TrainParameters
+    model: TrainModel
+    geom: ContactGeometry
+    speed: float
+    dt: float
+    n_steps: int
+    out_every: int
+    x_lead0: float
+    irregularity: Irregularity
+    structure: Any
+    packed: StructurePacked
+    head_height: float
+    monitors: Any
+    q0: np.ndarray
+    disp0: np.ndarray
+    f_const: np.ndarray
+    static_wheel: np.ndarray   # (n_ws, 2, 7) contact table of the static state
+    dt_limits: dict
+    static_iterations: int
+
+
+def _rail_kin_at(packed, disp, ws_x, head_height, irr: Irregularity) -> np.ndarray:
+    rail_kin = np.zeros((ws_x.size, 2, 4))
+    _rail_kinematics(packed, disp, np.zeros_like(disp), ws_x, 0.0, head_height,
+                     irr.values, irr.slopes, irr.x0, irr.dx, rail_kin)
+    return rail_kin
+
+
+def static_equilibrium(model, geom, speed, packed, structure_static, head_height, irr, ws_x,
+                       tol_load: float = 1e-3, max_iter: int = 30):
+    """Train + structure static state: fixed point between the vehicle Newton solve and the
+    structure's linear static solve. Returns (q, disp, wheel, iterations)."""
+    n_s = int(packed.n_dof)
+    disp = np.zeros(n_s)
+    prev = None
+    for it in range(1, max_iter + 1):
+        rail_kin = _rail_kin_at(packed, disp, ws_x, head_height, irr)
+        q, wheel = solve_vehicle_static(model, geom, speed, rail_kin)
+        if structure_static is None:
+            return q, disp, wheel, it
+        force = np.zeros(n_s)
+        for w in range(ws_x.size):
+            for k in range(2):
+                fy_rail = -wheel[w, k, 1]
+                _add_rail_point_force(packed, k, ws_x[w], -wheel[w, k, 2], fy_rail,
+                                      -head_height * fy_rail, force)
+        disp = structure_static.solve(force)
+        loads = wheel[:, :, 2]
+        if prev is not None and np.max(np.abs(loads - prev)) < tol_load:
+            rail_kin = _rail_kin_at(packed, disp, ws_x, head_height, irr)
+            q, wheel = solve_vehicle_static(model, geom, speed, rail_kin)
+            return q, disp, wheel, it
+        prev = loads
+    raise RuntimeError(f"train-structure static equilibrium did not converge in {max_iter} "
+                       "iterations; check the structure supports and the suspension stiffness")
+
+
+def prepare(case: Mapping[str, Any]) -> CoupledSetup:
+    """Build the train, contact, structure, irregularity and the static state of a case."""
+    case = dict(case or {})
+    sim = dict(case.get("simulation") or {})
+    train_cfg = dict(case.get("train") or {})
+    speed_kmh = sim.get("speed_kmh", train_cfg.get("speed_kmh"))
+    if speed_kmh is None:
+        raise ValueError("simulation.speed_kmh (or train.speed_kmh) is required")
+    speed = float(speed_kmh) / 3.6
+    if speed <= 0:
+        raise ValueError(f"simulation.speed_kmh must be positive, got {speed_kmh}")
+    train = train_from_config(train_cfg)
+    model = build_train_model(train)
+    geom = build_geometry(train.contact)
+    track = sim.get("track", "structure")
+    margin = float(sim.get("margin_m", 5.0))
+    train_len = -float(model.wheelset_x.min())
+    if track == "rigid":
+        structure, packed = None, rigid_packed()
+        head_height = train.contact.rail_head_height
+        x_lead0 = float(sim.get("start_x_m") or 0.0)
+        x_end = float(sim.get("end_x_m") or (x_lead0 + float(sim.get("rigid_length_m", 200.0))))
+        rail_node_mass = None
+        monitors = None
+    elif track == "structure":
+        from ..structure import build_structure
+        from ..structure.monitors import compile_monitors, default_monitors
+        structure = build_structure(case.get("structure") or {})
+        packed = structure.packed
+        head_height = structure.rail_head_height_m
+        x_min, x_max = structure.rail_x_range
+        x_lead0 = float(sim["start_x_m"]) if sim.get("start_x_m") is not None else x_min + margin + train_len
+        x_end = float(sim["end_x_m"]) if sim.get("end_x_m") is not None else x_max - margin
+        if x_lead0 - train_len < x_min or x_end > x_max:
+            raise ValueError(
+                f"the train ({train_len:.1f} m between end wheelsets) must stay on the modelled rails "
+                f"[{x_min:.1f}, {x_max:.1f}] m but runs with its leading wheelset from {x_lead0:.1f} "
+                f"to {x_end:.1f} m; lengthen the structure's approaches or set simulation.start_x_m/end_x_m")
+        rail_mass = float(structure.config["rail"]["mass_kg_m"]) * float(packed.rail_dx)
+        rail_node_mass = rail_mass
+        specs = case.get("monitors") or default_monitors(structure)
+        monitors = compile_monitors(structure, specs)
+    else:
+        raise ValueError(f"simulation.track: {track!r}; expected structure | rigid")
+    if x_end <= x_lead0:
+        raise ValueError(f"simulation: end_x_m {x_end} must exceed start_x_m {x_lead0}")
+    dt = float(sim.get("time_step_s", 1.0e-4))
+    limits = contact_time_step_limit(model, geom, speed, rail_node_mass)
+    if structure is not None:
+        structure.check_time_step(dt)
+    if dt > limits["dt_s"]:
+        raise ValueError(f"simulation.time_step_s={dt:g} s exceeds the wheel-rail contact stability "
+                         f"limit {limits['dt_s']:.3g} s (Hertz {limits['dt_hertz_s']:.3g} s, creep "
+                         f"{min(limits['dt_creep_spin_s'], limits['dt_creep_lateral_s']):.3g} s); "
+                         "reduce simulation.time_step_s")
+    out_dt = float(sim.get("output_interval_s", 1.0e-3))
+    out_every = max(1, int(round(out_dt / dt)))
+    duration = (x_end - x_lead0) / speed
+    n_steps = int(np.ceil(duration / dt / out_every)) * out_every
+    irr = build_irregularity(case.get("irregularity"), x_lead0 - train_len - 1.0,
+                             x_end + speed * dt * out_every + 1.0, x_lead0)
+    ws_x = x_lead0 + model.wheelset_x
+    sstatic = StructureStatic(structure) if structure is not None else None
+    q0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, packed, sstatic, head_height,
+                                                  irr, ws_x)
+    f_const = model.gravity_force + model.coupler_stiffness @ q0
+    return CoupledSetup(train=train, model=model, geom=geom, speed=speed, dt=dt, n_steps=n_steps,
+                        out_every=out_every, x_lead0=x_lead0, irregularity=irr, structure=structure,
+                        packed=packed, head_height=head_height, monitors=monitors, q0=q0,
+                        disp0=disp0, f_const=f_const, static_wheel=wheel0, dt_limits=limits,
+                        static_iterations=iters)
+
+
+@dataclass
+class RawResult:
+    """Arrays returned by the loop (before the table is built)."""
+
+    time: np.ndarray
+    wheel: np.ndarray      # (n_out, n_ws, 2, 4): F_x, F_y, F_z, y_rel
+    q: np.ndarray
+    a: np.ndarray
+    monitors: np.ndarray
+    wheel_peak: np.ndarray
+    h_peak: np.ndarray
+    monitor_peak: np.ndarray
+    wall_s: float
+
+
+def integrate(setup: CoupledSetup) -> RawResult:
+    """Run the njit loop for a prepared case; raises RuntimeError with the remedy on trouble."""
+    m = setup.model
+    n_v = m.n_dof
+    n_out = setup.n_steps // setup.out_every + 1
+    q = setup.q0.copy()
+    v = np.zeros(n_v)
+    a = np.zeros(n_v)
+    a_prev = np.zeros(n_v)
+    disp = setup.disp0.copy()
+    vel = np.zeros_like(disp)
+    acc = np.zeros_like(disp)
+    acc_prev = np.zeros_like(disp)
+    k, c = m.stiffness, m.damping
+    if setup.monitors is not None:
+        mon = setup.monitors
+        mon_ptr, mon_dof, mon_coef, mon_qty, mon_scale = mon.ptr, mon.dof, mon.coef, mon.qty, mon.scale
+    else:
+        mon_ptr, mon_dof, mon_coef = np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0)
+        mon_qty, mon_scale = np.zeros(0, np.int64), np.zeros(0)
+    n_mon = mon_ptr.size - 1
+    t_out = np.zeros(n_out)
+    wheel_hist = np.zeros((n_out, m.n_wheelsets, 2, 4))
+    q_hist = np.zeros((n_out, n_v))
+    a_hist = np.zeros((n_out, n_v))
+    mon_hist = np.zeros((n_out, n_mon))
+    wheel_peak = np.zeros((m.n_wheelsets, 2, 4))
+    wheel_peak[:, :, 1] = np.inf
+    h_peak = np.zeros(m.n_wheelsets)
+    mon_peak = np.zeros(n_mon)
+    ws_x0 = setup.x_lead0 + m.wheelset_x
+    irr = setup.irregularity
+    t0 = time.perf_counter()
+    status, step = _coupled_loop(
+        q, v, a, a_prev, 1.0 / m.mass, k.indptr.astype(np.int64), k.indices.astype(np.int64), k.data,
+        c.indptr.astype(np.int64), c.indices.astype(np.int64), c.data, setup.f_const,
+        m.wheelset_dofs, ws_x0, setup.speed, setup.geom.table, setup.geom.scalars(),
+        setup.head_height, irr.values, irr.slopes, irr.x0, irr.dx,
+        setup.packed, disp, vel, acc, acc_prev,
+        mon_ptr, mon_dof, mon_coef, mon_qty, mon_scale,
+        setup.dt, setup.n_steps, setup.out_every,
+        t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak)
+    wall = time.perf_counter() - t0
+    if status != 0:
+        raise RuntimeError(f"coupled simulation stopped at t = {(step + 1) * setup.dt:.4f} s: "
+                           f"{STATUS_MESSAGES[status]}")
+    return RawResult(t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak, wall)
+
+
+# ---------------------------------------------------------------------------------------------
+# results
+# ---------------------------------------------------------------------------------------------
+CARBODY_POINTS = ("front", "centre", "rear")
+
+
+def carbody_accelerations(setup: CoupledSetup, a_hist: np.ndarray) -> dict[str, np.ndarray]:
+    """Car-body floor accelerations (vertical, lateral) above the bogie pivots and at the centre.
+
+    At a point x_p from the car centre (rigid body, small rotations): a_z = z'' - x_p pitch'',
+    a_y = y'' + x_p yaw'' (model.point_row), at the car's centre-of-gravity height.
+    """
+    out = {}
+    for ci, car in enumerate(setup.train.cars):
+        base = DOF_PER_CAR * ci
+        for name, xp in zip(CARBODY_POINTS, (car.bogie_half_spacing, 0.0, -car.bogie_half_spacing)):
+            out[f"car{ci + 1}_body_{name}_az_m_s2"] = a_hist[:, base + Z] - xp * a_hist[:, base + PITCH]
+            out[f"car{ci + 1}_body_{name}_ay_m_s2"] = a_hist[:, base + Y] + xp * a_hist[:, base + YAW]
+    return out
+
+
+def results_table(setup: CoupledSetup, raw: RawResult) -> pd.DataFrame:
+    """Time histories: wheel forces, Q/P, unloading, H, car-body accelerations, monitors."""
+    m = setup.model
+    labels = _wheel_labels(m)
+    p0 = setup.static_wheel[:, :, 2]
+    cols: dict[str, np.ndarray] = {"time_s": raw.time,
+                                   "x_lead_m": setup.x_lead0 + setup.speed * raw.time}
+    for w, lab in enumerate(labels):
+        for k, side in enumerate(("left", "right")):
+            p = raw.wheel[:, w, k, 2]
+            qf = raw.wheel[:, w, k, 1]
+            cols[f"{lab}_{side}_P_N"] = p
+            cols[f"{lab}_{side}_Q_N"] = qf
+            with np.errstate(divide="ignore", invalid="ignore"):
+                qp = np.where(p > 0, np.abs(qf) / np.where(p > 0, p, 1.0), np.where(qf != 0, np.inf, 0.0))
+            cols[f"{lab}_{side}_QP"] = qp
+            cols[f"{lab}_{side}_unloading"] = (p0[w, k] - p) / p0[w, k]
+        cols[f"{lab}_H_N"] = raw.wheel[:, w, 0, 1] + raw.wheel[:, w, 1, 1]
+        cols[f"{lab}_y_mm"] = 1e3 * raw.q[:, m.wheelset_dofs[w, Y]]
+    cols.update(carbody_accelerations(setup, raw.a))
+    if setup.monitors is not None:
+        for i, name in enumerate(setup.monitors.names):
+            cols[name] = raw.monitors[:, i]
+    return pd.DataFrame(cols)
+
+
+def summarise(setup: CoupledSetup, raw: RawResult, table: pd.DataFrame) -> dict:
+    """Peak values (every step) and Sperling indices per car."""
+    m = setup.model
+    labels = _wheel_labels(m)
+    p0 = setup.static_wheel[:, :, 2]
+    peak = raw.wheel_peak
+    unloading = (p0 - peak[:, :, 1]) / p0
+    dt_out = setup.dt * setup.out_every
+    summary: dict[str, Any] = {
+        "speed_kmh": setup.speed * 3.6, "time_step_s": setup.dt, "n_steps": setup.n_steps,
+        "simulated_s": setup.n_steps * setup.dt, "wall_s": raw.wall_s,
+        "wall_s_per_simulated_s": raw.wall_s / (setup.n_steps * setup.dt),
+        "dt_limits": setup.dt_limits, "static_iterations": setup.static_iterations,
+        "static_wheel_load_N": {lab: p0[w].tolist() for w, lab in enumerate(labels)},
+        "max_wheel_load_N": float(peak[:, :, 0].max()),
+        "min_wheel_load_N": float(peak[:, :, 1].min()),
+        "max_lateral_wheel_force_N": float(peak[:, :, 2].max()),
+        "max_derailment_coefficient": float(peak[:, :, 3].max()),
+        "max_wheel_unloading": float(unloading.max()),
+        "max_wheelset_lateral_force_N": float(raw.h_peak.max()),
+        "contact": setup.geom.description,
+    }
+    if setup.monitors is not None:
+        summary["monitor_peaks"] = {name: float(raw.monitor_peak[i])
+                                    for i, name in enumerate(setup.monitors.names)}
+    sperling = {}
+    record_s = len(table) * dt_out
+    if record_s < 5.0:
+        log.warning("Sperling indices from a %.2f s record (shorter than the 5 s window of the "
+                    "standard): each evaluated as one window", record_s)
+    summary["sperling_record_s"] = record_s
+    for ci in range(setup.train.n_cars):
+        for direction, key in (("vertical", "az"), ("lateral", "ay")):
+            vals = [sperling_index(table[f"car{ci + 1}_body_{p}_{key}_m_s2"].to_numpy(), dt_out,
+                                   direction, quiet=True)[0] for p in CARBODY_POINTS]
+            sperling[f"car{ci + 1}_{direction}"] = float(max(vals))
+    summary["sperling"] = sperling
+    summary["max_carbody_vertical_acc_m_s2"] = float(max(
+        np.abs(table[c]).max() for c in table.columns if c.endswith("_az_m_s2")))
+    summary["max_carbody_lateral_acc_m_s2"] = float(max(
+        np.abs(table[c]).max() for c in table.columns if c.endswith("_ay_m_s2")))
+    return summary
+
+
+def run_coupled(case_config: Mapping[str, Any]) -> tuple[pd.DataFrame, dict]:
+    """Run one coupled case: (time-history table, summary dict). See the module docstring."""
+    setup = prepare(case_config)
+    log.info("coupled run: %d cars, %.1f km/h, dt %.2e s, %d steps, track %s", setup.train.n_cars,
+             setup.speed * 3.6, setup.dt, setup.n_steps,
+             "rigid" if setup.structure is None else f"{setup.packed.n_dof} structural DOF")
+    raw = integrate(setup)
+    table = results_table(setup, raw)
+    summary = summarise(setup, raw, table)
+    log.info("coupled run done: %.1f s wall, %.2f s per simulated s", raw.wall_s,
+             summary["wall_s_per_simulated_s"])
+    return table, summary

@@ -1,0 +1,19 @@
+"""Track-bridge structure (issue 3): rails on fasteners, slab/ballasted track, girders, piers.
+
+Linear part of the Xu-Zhai-Li train-track-bridge model (paper sections 2.2.4-2.2.10). Entry points:
+
+* :func:`build_structure` -- config dict -> :class:`StructureModel` (packed arrays for numba);
+* :func:`apply_factors` / :func:`carrier_positions` -- random-field factors per carrier;
+* kernels for the coupled loop in :mod:`ttbpipe.structure.kernels`
+  (see docs/dev/structure_interface.md);
+* :func:`~ttbpipe.structure.moving_loads.simulate` -- moving point loads, Zhai time loop;
+* :func:`~ttbpipe.structure.modal.modal_analysis` -- frequencies and mode shapes.
+
+Decisions and validation: docs/structure.md.
+"""
+
+from .assembly import (CARRIER_PARAMETERS, StructureModel, apply_factors, build_structure,
+                       carrier_positions)
+
+__all__ = ["CARRIER_PARAMETERS", "StructureModel", "apply_factors", "build_structure",
+           "carrier_positions"]

@@ -1,0 +1,619 @@
+"""Build the track-bridge structure: mesh, per-carrier properties, DOF numbering, packed arrays.
+
+Entry points: :func:`build_structure`, :func:`apply_factors`, :func:`carrier_positions`.
+Sparse global matrices for modal analysis, the time-step check and the tests:
+:meth:`StructureModel.matrices`. Decisions and sources: docs/structure.md.
+
+Geometry: x = 0 at the start of the first approach; approach, spans, approach. Rails: one node per
+fastener, spacing adjusted to fit the line exactly. Rail 0 is the left rail (+y), rail 1 the right.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+from scipy import sparse
+
+from . import properties as P
+from .girder import SpanReduction, hermite_shape, reduce_span
+from .kernels import StructurePacked
+
+log = logging.getLogger(__name__)
+
+#: Parameter names per carrier kind (the random-field interface, ttbpipe.fields.groups).
+CARRIER_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "rail_element": ("rail_E", "rail_mass", "rail_Iy", "rail_Iz"),
+    "fastener": ("pad_kz", "pad_cz", "pad_ky", "pad_cy"),
+    "slab_element": ("ca_kz", "ca_cz", "ca_ky", "ca_cy"),
+    "girder_element": ("girder_E", "girder_mass", "girder_Iy", "girder_Iz"),
+}
+PARAMETER_CARRIER = {p: kind for kind, ps in CARRIER_PARAMETERS.items() for p in ps}
+
+
+class _Links:
+    """Accumulates spring-damper links (CSR rows of (dof, coef), stiffness, damping)."""
+
+    def __init__(self) -> None:
+        self.dofs: list[np.ndarray] = []
+        self.coefs: list[np.ndarray] = []
+        self.k: list[float] = []
+        self.c: list[float] = []
+        self.kind: list[str] = []
+
+    def add(self, dofs, coefs, k: float, c: float, kind: str) -> None:
+        dofs = np.asarray(dofs, dtype=np.int64)
+        coefs = np.asarray(coefs, dtype=float)
+        keep = coefs != 0.0
+        self.dofs.append(dofs[keep]); self.coefs.append(coefs[keep])
+        self.k.append(float(k)); self.c.append(float(c)); self.kind.append(kind)
+
+    def arrays(self):
+        """CSR arrays in insertion order (sorting by term count measured no faster)."""
+        self.order = np.arange(len(self.k))
+        ptr = np.zeros(len(self.k) + 1, dtype=np.int64)
+        ptr[1:] = np.cumsum([d.size for d in self.dofs])
+        dof = np.concatenate(self.dofs) if self.dofs else np.zeros(0, np.int64)
+        coef = np.concatenate(self.coefs) if self.coefs else np.zeros(0)
+        return ptr, dof.astype(np.int64), coef, np.array(self.k, float), np.array(self.c, float)
+
+
+@dataclass
+class Layout:
+    """Geometry of the line (independent of the random properties)."""
+
+    total_m: float
+    bridge_start_m: float
+    bridge_end_m: float
+    span_starts_m: np.ndarray
+    span_lengths_m: np.ndarray
+    rail_x: np.ndarray                     # rail node (= fastener) positions
+    rail_zone: np.ndarray                  # "bridge" | "approach" per node
+    slab_units: list = field(default_factory=list)   # list of (zone, node_x array)
+    girder_n_el: list = field(default_factory=list)  # elements per span
+
+    @property
+    def n_spans(self) -> int:
+        return self.span_lengths_m.size
+
+
+def _slab_units(a: float, b: float, cfg: Mapping[str, Any], zone: str,
+                span_edges: list[float] | None = None) -> list:
+    """Slab units covering [a, b]: one continuous unit, or discrete units (per span on bridges)."""
+    el = float(cfg["element_length_m"])
+    units = []
+    if cfg["type"] == "continuous":
+        n = max(1, int(round((b - a) / el)))
+        return [(zone, np.linspace(a, b, n + 1))]
+    if cfg["type"] != "discrete":
+        raise ValueError(f"structure.slab.type: {cfg['type']!r}; expected continuous | discrete")
+    edges = span_edges if span_edges is not None else [a, b]
+    joint = float(cfg["joint_m"])
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        n_u = max(1, int(round((hi - lo) / (float(cfg["unit_length_m"]) + joint))))
+        pitch = (hi - lo) / n_u
+        for u in range(n_u):
+            ua, ub = lo + u * pitch + joint / 2, lo + (u + 1) * pitch - joint / 2
+            n = max(1, int(round((ub - ua) / el)))
+            units.append((zone, np.linspace(ua, ub, n + 1)))
+    return units
+
+
+def make_layout(cfg: Mapping[str, Any]) -> Layout:
+    """Line geometry from a resolved structure config."""
+    lay = cfg["layout"]
+    spans = np.asarray(lay["spans_m"], dtype=float)
+    if spans.size and np.any(spans <= 0):
+        raise ValueError(f"structure.layout.spans_m must be positive, got {spans.tolist()}")
+    approach = float(lay["approach_length_m"])
+    if approach < 0:
+        raise ValueError("structure.layout.approach_length_m must be >= 0")
+    total = 2 * approach + float(spans.sum())
+    if total <= 0:
+        raise ValueError("structure.layout: empty line (no spans and no approaches)")
+    starts = approach + np.concatenate([[0.0], np.cumsum(spans)[:-1]]) if spans.size else np.zeros(0)
+    bs, be = approach, approach + float(spans.sum())
+    spacing = float(cfg["fastener"]["spacing_m"])
+    n_el = max(2, int(round(total / spacing)))
+    rail_x = np.linspace(0.0, total, n_el + 1)
+    zone = np.where((rail_x >= bs - 1e-9) & (rail_x <= be + 1e-9) & (spans.size > 0),
+                    "bridge", "approach")
+    layout = Layout(total, bs, be, starts, spans, rail_x, zone)
+    if lay["bridge_track"] == "slab" and spans.size:
+        edges = list(np.concatenate([starts, [be]]))
+        layout.slab_units += _slab_units(bs, be, cfg["slab"], "bridge", edges)
+    if lay["approach_track"] == "slab" and approach > 0:
+        layout.slab_units += _slab_units(0.0, bs, cfg["slab"], "approach")
+        layout.slab_units += _slab_units(be, total, cfg["slab"], "approach")
+    layout.slab_units.sort(key=lambda u: u[1][0])
+    el = float(cfg["girder"]["element_length_m"])
+    layout.girder_n_el = [max(4, int(round(L / el))) for L in spans]
+    return layout
+
+
+def nominal_properties(cfg: Mapping[str, Any], layout: Layout) -> dict[str, np.ndarray]:
+    """Per-carrier nominal property arrays (SI), before random factors.
+
+    Rail and fastener arrays have shape (2, n) (left, right rail); slab and girder arrays (n,).
+    """
+    r, f, ca, g = cfg["rail"], cfg["fastener"], cfg["ca"], cfg["girder"]
+    n_rel = layout.rail_x.size - 1
+    n_fas = layout.rail_x.size
+    n_sel = sum(u[1].size - 1 for u in layout.slab_units)
+    n_gel = int(sum(layout.girder_n_el))
+    full = lambda v, shape: np.full(shape, float(v))  # noqa: E731
+    return {
+        "rail_E": full(r["E_Pa"], (2, n_rel)), "rail_mass": full(r["mass_kg_m"], (2, n_rel)),
+        "rail_Iy": full(r["Iy_m4"], (2, n_rel)), "rail_Iz": full(r["Iz_m4"], (2, n_rel)),
+        "pad_kz": full(f["kz_N_m"], (2, n_fas)), "pad_cz": full(f["cz_Ns_m"], (2, n_fas)),
+        "pad_ky": full(f["ky_N_m"], (2, n_fas)), "pad_cy": full(f["cy_Ns_m"], (2, n_fas)),
+        "ca_kz": full(ca["kz_N_m2"], n_sel), "ca_cz": full(ca["cz_Ns_m2"], n_sel),
+        "ca_ky": full(ca["ky_N_m2"], n_sel), "ca_cy": full(ca["cy_Ns_m2"], n_sel),
+        "girder_E": full(g["E_Pa"], n_gel), "girder_mass": full(g["mass_kg_m"], n_gel),
+        "girder_Iy": full(g["Iy_m4"], n_gel), "girder_Iz": full(g["Iz_m4"], n_gel),
+    }
+
+
+@dataclass
+class StructureModel:
+    """The assembled structure: configuration, geometry, per-carrier properties, packed arrays."""
+
+    config: dict
+    layout: Layout
+    properties: dict
+    packed: StructurePacked
+    spans: list                      # SpanReduction per span
+    dof_info: dict                   # offsets of each DOF block
+    slab_elements: np.ndarray        # (n, 2) x of slab element ends
+    slab_element_node0: np.ndarray   # first DOF of node a of each slab element
+    fixed: np.ndarray                # bool mask of fixed DOFs
+    link_kinds: list
+
+    @property
+    def n_dof(self) -> int:
+        return int(self.packed.n_dof)
+
+    @property
+    def rail_x_range(self) -> tuple[float, float]:
+        return float(self.layout.rail_x[0]), float(self.layout.rail_x[-1])
+
+    @property
+    def rail_head_height_m(self) -> float:
+        return float(self.config["rail"]["head_height_m"])
+
+    def matrices(self):
+        """Global sparse (M, K, C) assembled from the same arrays the kernels use."""
+        return assemble_matrices(self.packed)
+
+    def stable_time_step(self, safety: float = 0.9) -> float:
+        from .integrator import stable_time_step
+        return stable_time_step(self, safety)["dt_s"]
+
+    def check_time_step(self, dt: float) -> None:
+        from .integrator import check_time_step
+        check_time_step(self, dt)
+
+
+def build_structure(config: Mapping[str, Any] | None = None,
+                    factors: Mapping[str, np.ndarray] | None = None) -> StructureModel:
+    """Build the structure from a ``structure:`` config section (defaults fill missing keys)."""
+    cfg = P.resolve(config)
+    layout = make_layout(cfg)
+    props = nominal_properties(cfg, layout)
+    if factors:
+        props = _factored(props, factors)
+    return _assemble(cfg, layout, props)
+
+
+def apply_factors(model_or_properties, factors: Mapping[str, np.ndarray]):
+    """Multiply per-carrier properties by random-field factors.
+
+    ``factors``: {parameter name: array over the carriers of its kind}, names from
+    :data:`CARRIER_PARAMETERS`. A rail/fastener array of length n applies to both rails, of length
+    2n to rail 0 then rail 1. Given a :class:`StructureModel`, returns a NEW re-assembled model;
+    given a properties dict, returns a new dict.
+    """
+    if isinstance(model_or_properties, StructureModel):
+        m = model_or_properties
+        return _assemble(m.config, m.layout, _factored(m.properties, factors))
+    return _factored(model_or_properties, factors)
+
+
+def _factored(props: Mapping[str, np.ndarray], factors: Mapping[str, np.ndarray]) -> dict:
+    out = {k: np.array(v, dtype=float, copy=True) for k, v in props.items()}
+    for name, fac in factors.items():
+        if name not in PARAMETER_CARRIER:
+            raise ValueError(f"factor {name!r}: unknown parameter; expected one of "
+                             f"{sorted(PARAMETER_CARRIER)}")
+        fac = np.asarray(fac, dtype=float)
+        base = out[name]
+        n = base.shape[-1]
+        if base.ndim == 2 and fac.size == 2 * n:
+            fac = fac.reshape(2, n)
+        elif fac.shape != (n,) and not (base.ndim == 2 and fac.shape == base.shape):
+            raise ValueError(f"factor {name!r}: {fac.size} values, but the structure has {n} "
+                             f"{PARAMETER_CARRIER[name]} carriers"
+                             + (f" (or {2 * n} for both rails)" if base.ndim == 2 else "")
+                             + "; sample the field at carrier_positions(model)")
+        if not np.all(np.isfinite(fac)) or np.any(fac <= 0):
+            bad = int(np.sum(~np.isfinite(fac) | (fac <= 0)))
+            raise ValueError(f"factor {name!r}: {bad} non-positive or non-finite values; a "
+                             "property factor must be > 0 (truncate the field's marginal)")
+        out[name] = base * fac
+    return out
+
+
+def carrier_positions(model: StructureModel) -> dict[str, np.ndarray]:
+    """x (m) of every carrier, per kind, in the order factor arrays must follow.
+
+    rail_element: element midpoints (shared by both rails); fastener: rail node positions (one
+    seat per rail per position); slab_element: element midpoints of all slab units; girder_element:
+    element midpoints of each span's FE mesh, span after span.
+    """
+    lay = model.layout
+    x = lay.rail_x
+    girder = [s.node_x[:-1] + 0.5 * np.diff(s.node_x) for s in model.spans]
+    return {
+        "rail_element": 0.5 * (x[:-1] + x[1:]),
+        "fastener": x.copy(),
+        "slab_element": model.slab_elements.mean(axis=1) if model.slab_elements.size
+        else np.zeros(0),
+        "girder_element": np.concatenate(girder) if girder else np.zeros(0),
+    }
+
+
+def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> StructureModel:
+    """DOF numbering, lumped masses, beams, links and span blocks -> StructureModel."""
+    cfg = copy.deepcopy(cfg)
+    lay = cfg["layout"]
+    rail_c, fas, slab_c, g_c = cfg["rail"], cfg["fastener"], cfg["slab"], cfg["girder"]
+    brg, pier_c, bal = cfg["bearing"], cfg["pier"], cfg["ballasted"]
+    has_track = lay["bridge_track"] != "none"
+    if lay["bridge_track"] not in ("slab", "rigid", "none"):
+        raise ValueError(f"structure.layout.bridge_track: {lay['bridge_track']!r}; expected "
+                         "slab | rigid | none")
+    if lay["approach_track"] not in ("ballasted", "slab", "rigid"):
+        raise ValueError(f"structure.layout.approach_track: {lay['approach_track']!r}; expected "
+                         "ballasted | slab | rigid")
+
+    # ---- DOF numbering -------------------------------------------------------------------
+    n_rn = layout.rail_x.size if has_track else 0
+    off = {"rail": 0}
+    n = 2 * 5 * n_rn
+    off["slab"] = n
+    slab_node_dof0 = []
+    for _, xs in (layout.slab_units if has_track else []):
+        slab_node_dof0.append(n + 5 * np.arange(xs.size))
+        n += 5 * xs.size
+    ballasted_nodes = np.flatnonzero(layout.rail_zone == "approach") \
+        if has_track and lay["approach_track"] == "ballasted" else np.zeros(0, np.int64)
+    off["sleeper"] = n
+    sleeper_of_node = -np.ones(n_rn, dtype=np.int64)
+    sleeper_of_node[ballasted_nodes] = np.arange(ballasted_nodes.size)
+    n += 3 * ballasted_nodes.size
+    off["ballast"] = n
+    n += 2 * ballasted_nodes.size
+    n_piers = max(layout.n_spans - 1, 0)
+    off["pier"] = n
+    n += 3 * n_piers
+    n_diag = n
+    off["span"] = n
+
+    # ---- girder spans ----------------------------------------------------------------------
+    spans: list[SpanReduction] = []
+    span_dof0 = []
+    nu_g = float(g_c["poisson"])
+    e0 = 0
+    for s, (x0, L) in enumerate(zip(layout.span_starts_m, layout.span_lengths_m)):
+        ne = layout.girder_n_el[s]
+        sl = slice(e0, e0 + ne)
+        e0 += ne
+        E = props["girder_E"][sl]
+        mass = props["girder_mass"][sl]
+        Iy, Iz = props["girder_Iy"][sl], props["girder_Iz"][sl]
+        roll_inertia = mass / float(g_c["area_m2"]) * (Iy + Iz)
+        red = reduce_span(float(x0), float(L), ne, E, E / (2 * (1 + nu_g)), mass, Iy, Iz,
+                          np.full(ne, float(g_c["J_m4"])), roll_inertia,
+                          float(g_c["damping_ratio"]), g_c["rayleigh_frequencies_hz"],
+                          float(g_c["max_mode_frequency_hz"]),
+                          int(g_c["min_modes_per_direction"]))
+        spans.append(red)
+        span_dof0.append(n)
+        n += red.n
+    n_dof = n
+    fixed = np.zeros(n_dof, dtype=bool)
+    if brg["rigid"]:
+        for o in span_dof0:
+            fixed[o:o + 6] = True
+
+    # ---- lumped masses -------------------------------------------------------------------
+    mass = np.zeros(n_diag)
+    beam_a, beam_b, beam_L, beam_EIv, beam_EIl, beam_GK = [], [], [], [], [], []
+    if has_track:
+        h = float(layout.rail_x[1] - layout.rail_x[0])
+        rho_I0_per_m = float(rail_c["density_kg_m3"]) * float(rail_c["I0_m4"])
+        m_ref = float(rail_c["mass_kg_m"])
+        GK0, E0 = float(rail_c["GK_Nm2"]), float(rail_c["E_Pa"])
+        rot = float(rail_c["rotary_inertia_scaling"]) / 78.0   # HRZ lumping: m L^3 / 78
+        for r in range(2):
+            m_el = props["rail_mass"][r]
+            node0 = 5 * r * n_rn + 5 * np.arange(n_rn - 1)
+            for a_dofs, sign in ((node0, 0), (node0 + 5, 1)):
+                np.add.at(mass, a_dofs, 0.5 * m_el * h)
+                np.add.at(mass, a_dofs + 2, 0.5 * m_el * h)
+                np.add.at(mass, a_dofs + 1, rot * m_el * h ** 3)
+                np.add.at(mass, a_dofs + 3, rot * m_el * h ** 3)
+                # roll inertia rho*I0 scales with the mass factor (same density change)
+                np.add.at(mass, a_dofs + 4, 0.5 * rho_I0_per_m * (m_el / m_ref) * h)
+            beam_a.append(node0); beam_b.append(node0 + 5); beam_L.append(np.full(n_rn - 1, h))
+            E = props["rail_E"][r]
+            beam_EIv.append(E * props["rail_Iy"][r]); beam_EIl.append(E * props["rail_Iz"][r])
+            beam_GK.append(GK0 * E / E0)   # G = E / (2 (1 + nu)) scales with E
+        # slab beams: rigid cross-section 3-D beam (vertical, lateral bending, roll)
+        b_s, t_s = float(slab_c["width_m"]), float(slab_c["thickness_m"])
+        E_s, rho_s = float(slab_c["E_Pa"]), float(slab_c["density_kg_m3"])
+        G_s = E_s / (2 * (1 + float(slab_c["poisson"])))
+        K_tor = b_s * t_s ** 3 / 3 * (1 - 0.63 * t_s / b_s)   # Roark, thin rectangle
+        m_s = rho_s * b_s * t_s
+        J_s = rho_s * (b_s * t_s ** 3 + t_s * b_s ** 3) / 12
+        rot_s = float(slab_c["rotary_inertia_scaling"]) / 78.0
+        for (zone, xs), d0 in zip(layout.slab_units, slab_node_dof0):
+            Ls = np.diff(xs)
+            for a_dofs in (d0[:-1], d0[1:]):
+                np.add.at(mass, a_dofs, 0.5 * m_s * Ls)
+                np.add.at(mass, a_dofs + 2, 0.5 * m_s * Ls)
+                np.add.at(mass, a_dofs + 1, rot_s * m_s * Ls ** 3)
+                np.add.at(mass, a_dofs + 3, rot_s * m_s * Ls ** 3)
+                np.add.at(mass, a_dofs + 4, 0.5 * J_s * Ls)
+            beam_a.append(d0[:-1]); beam_b.append(d0[1:]); beam_L.append(Ls)
+            beam_EIv.append(np.full(Ls.size, E_s * b_s * t_s ** 3 / 12))
+            beam_EIl.append(np.full(Ls.size, E_s * t_s * b_s ** 3 / 12))
+            beam_GK.append(np.full(Ls.size, G_s * K_tor))
+        ns = ballasted_nodes.size
+        sl0 = off["sleeper"] + 3 * np.arange(ns)
+        mass[sl0] = float(bal["sleeper_mass_kg"])
+        mass[sl0 + 1] = float(bal["sleeper_mass_kg"])
+        mass[sl0 + 2] = float(bal["sleeper_roll_inertia_kgm2"])
+        mass[off["ballast"]:off["ballast"] + 2 * ns] = float(bal["ballast_mass_kg"])
+    p0 = off["pier"] + 3 * np.arange(n_piers)
+    mass[p0] = float(pier_c["mass_kg"]); mass[p0 + 1] = float(pier_c["mass_kg"])
+    mass[p0 + 2] = float(pier_c["roll_inertia_kgm2"])
+    if np.any(mass <= 0):
+        raise RuntimeError(f"internal: {int(np.sum(mass <= 0))} diagonal DOFs without mass")
+    inv_mass = np.zeros(n_dof)
+    inv_mass[:n_diag] = 1.0 / mass
+    inv_mass[fixed] = 0.0
+
+    # ---- links ------------------------------------------------------------------------------
+    links = _Links()
+    slab_elems = []        # (xa, xb, dof_a, zone)
+    for (zone, xs), d0 in zip(layout.slab_units if has_track else [], slab_node_dof0):
+        for i in range(xs.size - 1):
+            slab_elems.append((xs[i], xs[i + 1], d0[i], d0[i + 1], zone))
+    slab_x = np.array([[e[0], e[1]] for e in slab_elems]).reshape(-1, 2)
+
+    def span_rows(x: float):
+        """(span index, z row, y row, roll row) of the girder under x, or None."""
+        for s, red in enumerate(spans):
+            if red.start_m - 1e-9 <= x <= red.start_m + red.length_m + 1e-9:
+                return s, *red.rows_at(x)
+        return None
+
+    if has_track:
+        half_gauge = 0.5 * float(fas["rail_centre_distance_m"])
+        d_f = float(rail_c["foot_depth_m"])
+        bf2 = float(rail_c["foot_width_m"]) ** 2 / 12.0
+        t_half = 0.5 * float(slab_c["thickness_m"])
+        for i, x in enumerate(layout.rail_x):
+            zone = layout.rail_zone[i]
+            kind = lay["bridge_track"] if zone == "bridge" else lay["approach_track"]
+            seat = None
+            if kind == "slab":
+                cand = [j for j, e in enumerate(slab_elems) if e[4] == zone]
+                xa = slab_x[cand, 0]; xb = slab_x[cand, 1]
+                inside = np.flatnonzero((xa <= x + 1e-9) & (x <= xb + 1e-9))
+                j = cand[inside[0]] if inside.size else cand[int(np.argmin(
+                    np.minimum(np.abs(xa - x), np.abs(xb - x))))]
+                xa_j, xb_j, da, db, _ = slab_elems[j]
+                Ls = xb_j - xa_j
+                xi = float(np.clip((x - xa_j) / Ls, 0.0, 1.0))
+                N = hermite_shape(xi, Ls)
+                seat = ("slab", da, db, N, xi)
+            for r in range(2):
+                e_r = half_gauge if r == 0 else -half_gauge
+                rd = 5 * (r * n_rn + i)
+                kz, cz = props["pad_kz"][r, i], props["pad_cz"][r, i]
+                ky, cy = props["pad_ky"][r, i], props["pad_cy"][r, i]
+                if kind == "slab":
+                    _, da, db, N, xi = seat
+                    zd = [rd, da, da + 1, db, db + 1, da + 4, db + 4]
+                    zc = [1.0, -N[0], -N[1], -N[2], -N[3], -e_r * (1 - xi), -e_r * xi]
+                    yd = [rd + 2, rd + 4, da + 2, da + 3, db + 2, db + 3, da + 4, db + 4]
+                    yc = [1.0, d_f, -N[0], -N[1], -N[2], -N[3], t_half * (1 - xi), t_half * xi]
+                    rdofs = [rd + 4, da + 4, db + 4]
+                    rc = [1.0, -(1 - xi), -xi]
+                elif kind == "ballasted":
+                    sd = off["sleeper"] + 3 * sleeper_of_node[i]
+                    zd, zc = [rd, sd, sd + 2], [1.0, -1.0, -e_r]
+                    yd, yc = [rd + 2, rd + 4, sd + 1], [1.0, d_f, -1.0]
+                    rdofs, rc = [rd + 4, sd + 2], [1.0, -1.0]
+                else:  # rigid ground
+                    zd, zc = [rd], [1.0]
+                    yd, yc = [rd + 2, rd + 4], [1.0, d_f]
+                    rdofs, rc = [rd + 4], [1.0]
+                links.add(zd, zc, kz, cz, "pad_z")
+                links.add(yd, yc, ky, cy, "pad_y")
+                links.add(rdofs, rc, kz * bf2, cz * bf2, "pad_roll")
+        # ballast: sleeper -> two blocks, shear between blocks, blocks -> subgrade
+        ns = ballasted_nodes.size
+        for j in range(ns):
+            sd = off["sleeper"] + 3 * j
+            for side in range(2):
+                e_r = half_gauge if side == 0 else -half_gauge
+                bd = off["ballast"] + 2 * j + side
+                links.add([sd, sd + 2, bd], [1.0, e_r, -1.0], bal["ballast_kz_N_m"],
+                          bal["ballast_cz_Ns_m"], "ballast_z")
+                links.add([bd], [1.0], bal["subgrade_k_N_m"], bal["subgrade_c_Ns_m"], "subgrade")
+                if j + 1 < ns and ballasted_nodes[j + 1] == ballasted_nodes[j] + 1:
+                    links.add([bd, bd + 2], [1.0, -1.0], bal["shear_k_N_m"], bal["shear_c_Ns_m"],
+                              "ballast_shear")
+            links.add([sd + 1], [1.0], bal["ballast_ky_N_m"], bal["ballast_cy_Ns_m"], "ballast_y")
+        # CA mortar (bridge) or foundation (slab on subgrade), lumped at element ends
+        b2 = float(slab_c["width_m"]) ** 2 / 12.0
+        h_deck = float(g_c["deck_height_m"])
+        sub = cfg["slab_on_subgrade"]
+        for j, (xa, xb, da, db, zone) in enumerate(slab_elems):
+            w = 0.5 * (xb - xa)
+            if zone == "bridge":
+                kz, cz = props["ca_kz"][j], props["ca_cz"][j]
+                ky, cy = props["ca_ky"][j], props["ca_cy"][j]
+            else:
+                scale = lambda name, key: props[name][j] / float(cfg["ca"][key])  # noqa: E731
+                kz = float(sub["foundation_kz_N_m2"]) * scale("ca_kz", "kz_N_m2")
+                cz = float(sub["foundation_cz_Ns_m2"]) * scale("ca_cz", "cz_Ns_m2")
+                ky = float(sub["foundation_ky_N_m2"]) * scale("ca_ky", "ky_N_m2")
+                cy = float(sub["foundation_cy_Ns_m2"]) * scale("ca_cy", "cy_Ns_m2")
+            for x, d in ((xa, da), (xb, db)):
+                g = span_rows(x) if zone == "bridge" else None
+                if g is None:
+                    zd, zc = [d], [1.0]
+                    yd, yc = [d + 2, d + 4], [1.0, t_half]
+                    rdofs, rc = [d + 4], [1.0]
+                else:
+                    s, rz, ry, rr = g
+                    o = span_dof0[s]
+                    idx = np.arange(o, o + spans[s].n)
+                    zd, zc = [d, *idx], [1.0, *(-rz)]
+                    yd, yc = [d + 2, d + 4, *idx], [1.0, t_half, *(-(ry - h_deck * rr))]
+                    rdofs, rc = [d + 4, *idx], [1.0, *(-rr)]
+                links.add(zd, zc, kz * w, cz * w, "ca_z")
+                links.add(yd, yc, ky * w, cy * w, "ca_y")
+                links.add(rdofs, rc, kz * w * b2, cz * w * b2, "ca_roll")
+    # bearings: girder end (z, y, roll) -> pier (y, z, roll) or abutment (ground)
+    if not brg["rigid"]:
+        eb = 0.5 * float(brg["lateral_spacing_m"])
+        hb = float(brg["height_m"])
+        for s in range(layout.n_spans):
+            o = span_dof0[s]
+            for end in range(2):
+                gz, gy, gr = o + 3 * end, o + 3 * end + 1, o + 3 * end + 2
+                pier = s - 1 if end == 0 else s
+                has_pier = 0 <= pier < n_piers
+                pd = off["pier"] + 3 * pier
+                for e_b in (eb, -eb):
+                    zd, zc = [gz, gr], [1.0, e_b]
+                    if has_pier:
+                        zd += [pd + 1, pd + 2]; zc += [-1.0, -e_b]
+                    links.add(zd, zc, brg["kz_N_m"], brg["cz_Ns_m"], "bearing_z")
+                yd, yc = [gy, gr], [1.0, hb]
+                if has_pier:
+                    yd += [pd]; yc += [-1.0]
+                links.add(yd, yc, 2 * float(brg["ky_N_m"]), 2 * float(brg["cy_Ns_m"]),
+                          "bearing_y")
+    for p in range(n_piers):
+        pd = off["pier"] + 3 * p
+        links.add([pd], [1.0], pier_c["ky_N_m"], pier_c["cy_Ns_m"], "pier_y")
+        links.add([pd + 1], [1.0], pier_c["kz_N_m"], pier_c["cz_Ns_m"], "pier_z")
+        links.add([pd + 2], [1.0], pier_c["kroll_Nm_rad"], pier_c["croll_Nms_rad"], "pier_roll")
+
+    # ---- span blocks ----------------------------------------------------------------------------
+    mat0, Kf, Cf, Mi = [], [], [], []
+    pos = 0
+    for s, red in enumerate(spans):
+        free = ~fixed[span_dof0[s]:span_dof0[s] + red.n]
+        minv = np.zeros((red.n, red.n))
+        minv[np.ix_(free, free)] = np.linalg.inv(red.M[np.ix_(free, free)])
+        mat0.append(pos); pos += red.n * red.n
+        Kf.append(red.K.ravel()); Cf.append(red.C.ravel()); Mi.append(minv.ravel())
+    ptr, ldof, lcoef, lk, lc = links.arrays()
+    cat = lambda parts, dt=float: (np.concatenate(parts).astype(dt) if parts  # noqa: E731
+                                   else np.zeros(0, dtype=dt))
+    packed = StructurePacked(
+        n_dof=int(n_dof), n_diag=int(n_diag), inv_mass=inv_mass,
+        beam_dof_a=cat(beam_a, np.int64), beam_dof_b=cat(beam_b, np.int64),
+        beam_L=cat(beam_L), beam_EIv=cat(beam_EIv), beam_EIl=cat(beam_EIl),
+        beam_GK=cat(beam_GK),
+        link_ptr=ptr, link_dof=ldof, link_coef=lcoef, link_k=lk, link_c=lc,
+        span_dof0=np.array(span_dof0, dtype=np.int64),
+        span_n=np.array([red.n for red in spans], dtype=np.int64),
+        span_mat0=np.array(mat0, dtype=np.int64), span_K=cat(Kf), span_C=cat(Cf),
+        span_Minv=cat(Mi), span_scratch=np.zeros(max([red.n for red in spans] + [1])),
+        n_rails=2 if has_track else 0, rail_x0=float(layout.rail_x[0]),
+        rail_dx=float(layout.rail_x[1] - layout.rail_x[0]), rail_n_nodes=int(n_rn),
+        rail_dof0=np.array([0, 5 * n_rn], dtype=np.int64),
+    )
+    info = dict(off, n_diag=n_diag, n_dof=n_dof, span_dof0=span_dof0, n_piers=n_piers,
+                n_sleepers=int(ballasted_nodes.size), n_rail_nodes=n_rn,
+                slab_node_dof0=slab_node_dof0, span_block_mass=[red.M for red in spans])
+    node_a = np.array([e[2] for e in slab_elems], dtype=np.int64)
+    return StructureModel(config=cfg, layout=layout, properties=dict(props), packed=packed,
+                          spans=spans, dof_info=info, slab_elements=slab_x,
+                          slab_element_node0=node_a, fixed=fixed,
+                          link_kinds=[links.kind[i] for i in links.order])
+
+
+def assemble_matrices(packed: StructurePacked):
+    """Global sparse (M, K, C), CSR, from the packed arrays (reference for the kernels).
+
+    Fixed DOFs keep their (unit) mass and get no special treatment here; callers restrict to
+    ``~model.fixed``.
+    """
+    n = packed.n_dof
+    rows, cols, kv, cv = [], [], [], []
+    # beams
+    a, b, L = packed.beam_dof_a, packed.beam_dof_b, packed.beam_L
+    for plane, EI in ((0, packed.beam_EIv), (1, packed.beam_EIl)):
+        d = np.stack([a + 2 * plane, a + 2 * plane + 1, b + 2 * plane, b + 2 * plane + 1], 1)
+        s = EI / L ** 3
+        ke = np.empty((L.size, 4, 4))
+        base = [[12, 6, -12, 6], [6, 4, -6, 2], [-12, -6, 12, -6], [6, 2, -6, 4]]
+        powers = [[0, 1, 0, 1], [1, 2, 1, 2], [0, 1, 0, 1], [1, 2, 1, 2]]
+        for i in range(4):
+            for j in range(4):
+                ke[:, i, j] = s * base[i][j] * L ** powers[i][j]
+        rows.append(np.repeat(d, 4, axis=1).ravel()); cols.append(np.tile(d, 4).ravel())
+        kv.append(ke.ravel()); cv.append(np.zeros(ke.size))
+    d = np.stack([a + 4, b + 4], 1)
+    kt = packed.beam_GK / L
+    ke = np.stack([kt, -kt, -kt, kt], 1)
+    rows.append(np.repeat(d, 2, axis=1).ravel()); cols.append(np.tile(d, 2).ravel())
+    kv.append(ke.ravel()); cv.append(np.zeros(ke.size))
+    # links
+    for l in range(packed.link_k.size):
+        j0, j1 = packed.link_ptr[l], packed.link_ptr[l + 1]
+        dof, coef = packed.link_dof[j0:j1], packed.link_coef[j0:j1]
+        outer = np.outer(coef, coef).ravel()
+        rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
+        kv.append(packed.link_k[l] * outer); cv.append(packed.link_c[l] * outer)
+    # spans
+    mrows, mcols, mv = [np.arange(packed.n_diag)], [np.arange(packed.n_diag)], []
+    with np.errstate(divide="ignore"):
+        diag = np.where(packed.inv_mass[:packed.n_diag] > 0,
+                        1.0 / packed.inv_mass[:packed.n_diag], 1.0)
+    mv.append(diag)
+    for s in range(packed.span_dof0.size):
+        o, m, base = packed.span_dof0[s], packed.span_n[s], packed.span_mat0[s]
+        idx = np.arange(o, o + m)
+        r_, c_ = np.repeat(idx, m), np.tile(idx, m)
+        rows.append(r_); cols.append(c_)
+        kv.append(packed.span_K[base:base + m * m]); cv.append(packed.span_C[base:base + m * m])
+        Minv = packed.span_Minv[base:base + m * m].reshape(m, m)
+        Mb = _span_mass_from_inverse(Minv)
+        mrows.append(r_); mcols.append(c_); mv.append(Mb.ravel())
+    R, Cc = np.concatenate(rows), np.concatenate(cols)
+    K = sparse.coo_matrix((np.concatenate(kv), (R, Cc)), shape=(n, n)).tocsr()
+    C = sparse.coo_matrix((np.concatenate(cv), (R, Cc)), shape=(n, n)).tocsr()
+    M = sparse.coo_matrix((np.concatenate(mv), (np.concatenate(mrows), np.concatenate(mcols))),
+                          shape=(n, n)).tocsr()
+    return M, K, C
+
+
+def _span_mass_from_inverse(Minv: np.ndarray) -> np.ndarray:
+    """Mass block from the stored inverse; fixed coordinates (zero rows) get a unit mass."""
+    free = np.any(Minv != 0, axis=1)
+    M = np.eye(Minv.shape[0])
+    M[np.ix_(free, free)] = np.linalg.inv(Minv[np.ix_(free, free)])
+    return M

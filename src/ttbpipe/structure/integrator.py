@@ -1,0 +1,155 @@
+"""Time integration of the structure: Zhai's explicit method, its stability limit, the time loop.
+
+Zhai's two-step explicit method (Zhai 1996, IJNME 39:4199; physics.md section 5) with lumped
+(diagonal) mass for rails, slab, sleepers, ballast and piers and a small dense inverse mass per
+girder span block: no factorisation, no global matrix in the loop. The choice against Newmark and
+the measurements behind it are in docs/structure.md.
+"""
+
+from __future__ import annotations
+
+import logging
+from functools import lru_cache
+
+import numpy as np
+from numba import njit
+from scipy.sparse import linalg as splinalg
+
+from .kernels import (_add_rail_point_force, _structure_accelerations, _zhai_predict)
+
+log = logging.getLogger(__name__)
+
+
+def zhai_amplification(omega_dt: float, zeta: float, psi: float = 0.5,
+                       phi: float = 0.5) -> np.ndarray:
+    """Amplification matrix of Zhai's method on x'' + 2 zeta w x' + w^2 x = 0.
+
+    State (x, v dt, a dt^2, a_prev dt^2) at step n -> n+1, from the update formulas of
+    physics.md section 5 with a_{n+1} = -w^2 x_{n+1} - 2 zeta w v_{n+1}.
+    """
+    O = omega_dt
+    A = np.zeros((4, 4))
+    A[0] = [1.0, 1.0, 0.5 + psi, -psi]                 # x_{n+1}
+    A[1] = [0.0, 1.0, 1.0 + phi, -phi]                 # v_{n+1} dt
+    A[2] = -O * O * A[0] - 2 * zeta * O * A[1]         # a_{n+1} dt^2
+    A[3] = [0.0, 0.0, 1.0, 0.0]                        # a_prev <- a_n
+    return A
+
+
+@lru_cache(maxsize=256)
+def zhai_critical_omega_dt(zeta: float) -> float:
+    """Largest omega*dt with spectral radius <= 1 (bisection); 2.0 undamped, ~1.81 at zeta 0.05."""
+    def stable(O: float) -> bool:
+        return np.max(np.abs(np.linalg.eigvals(zhai_amplification(O, zeta)))) <= 1.0 + 1e-9
+    lo, hi = 1e-3, 4.0
+    if not stable(lo):
+        return 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    return lo
+
+
+def stable_time_step(model, safety: float = 0.9, n_modes: int = 12) -> dict:
+    """Stability limit of Zhai's method for this structure.
+
+    The top ``n_modes`` eigenpairs of (K, M) (scipy ARPACK, shift-invert about a bound above the
+    spectrum would be slower here: M is block diagonal so plain 'LM' mode is cheap) give omega and
+    the modal damping ratio zeta = phi^T C phi / (2 omega); each mode allows
+    dt = Omega_crit(zeta) / omega. Returns the minimum times ``safety`` with its mode.
+    """
+    M, K, C = model.matrices()
+    free = np.flatnonzero(~model.fixed)
+    M, K, C = (A[free][:, free].tocsc() for A in (M, K, C))
+    k = min(n_modes, free.size - 2)
+    w2, vec = splinalg.eigsh(K, k=k, M=M, which="LM", tol=1e-8)
+    best = None
+    for i in range(w2.size):
+        w = np.sqrt(max(w2[i], 0.0))
+        if w <= 0:
+            continue
+        v = vec[:, i]
+        zeta = float(v @ (C @ v)) / (2 * w * float(v @ (M @ v)))
+        dt = zhai_critical_omega_dt(round(zeta, 6)) / w
+        if best is None or dt < best["dt_limit_s"]:
+            best = {"dt_limit_s": dt, "omega_rad_s": w, "frequency_hz": w / (2 * np.pi),
+                    "zeta": zeta}
+    best["dt_s"] = safety * best["dt_limit_s"]
+    best["omega_max_rad_s"] = float(np.sqrt(np.max(w2)))
+    return best
+
+
+def check_time_step(model, dt: float) -> dict:
+    """Raise ValueError naming the remedy when dt exceeds the Zhai stability limit."""
+    info = stable_time_step(model, safety=1.0)
+    if dt > info["dt_limit_s"]:
+        raise ValueError(
+            f"time step dt={dt:.3g} s exceeds the Zhai stability limit {info['dt_limit_s']:.3g} s "
+            f"of this structure (mode at {info['frequency_hz']:.0f} Hz, damping ratio "
+            f"{info['zeta']:.3f}); set simulation.time_step_s <= "
+            f"{0.9 * info['dt_limit_s']:.3g}, or raise structure.rail.rotary_inertia_scaling / "
+            "coarsen structure.slab.element_length_m (see docs/structure.md)")
+    return info
+
+
+@njit(cache=True)
+def _run_moving_loads(packed, load_rail, load_x0, load_v, load_F0, load_F1, load_freq,
+                      load_phase, extra_dofs, extra_force, dt, n_steps, out_every,
+                      mon_ptr, mon_dof, mon_coef, mon_qty, disp, vel, acc, acc_prev,
+                      nodal_force, out, blowup_m):
+    """Zhai time loop with moving point loads on the rails; records monitors every out_every steps.
+
+    Load i: rail load_rail[i], position x = load_x0[i] + load_v[i] t, forces
+    (Fz, Fy, Mx) = load_F0[i] + load_F1[i] sin(2 pi load_freq[i] t + load_phase[i]).
+    extra_force[step, j] is added to DOF extra_dofs[j] (loads acting directly on the girder
+    coordinates, for girder-only validation). Monitor channel c is sum_j mon_coef_j q[mon_dof_j]
+    with q = disp, vel or acc (mon_qty[c] = 0, 1, 2). Returns the step at which a monitored or
+    rail value exceeded ``blowup_m`` or became NaN (-1 if none).
+    """
+    n_loads = load_rail.shape[0]
+    n_mon = mon_qty.shape[0]
+    n_extra = extra_dofs.shape[0]
+    row = 0
+    for step in range(n_steps + 1):
+        t = step * dt
+        if step > 0:
+            psi = 0.0 if step == 1 else 0.5
+            _zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
+            for i in range(disp.shape[0]):
+                acc_prev[i] = acc[i]
+        for i in range(nodal_force.shape[0]):
+            nodal_force[i] = 0.0
+        for i in range(n_loads):
+            x = load_x0[i] + load_v[i] * t
+            s = np.sin(2.0 * np.pi * load_freq[i] * t + load_phase[i])
+            _add_rail_point_force(packed, load_rail[i], x, load_F0[i, 0] + load_F1[i, 0] * s,
+                                  load_F0[i, 1] + load_F1[i, 1] * s,
+                                  load_F0[i, 2] + load_F1[i, 2] * s, nodal_force)
+        if n_extra > 0:
+            for j in range(n_extra):
+                nodal_force[extra_dofs[j]] += extra_force[step, j]
+        _structure_accelerations(packed, disp, vel, nodal_force, acc)
+        if step % out_every == 0:
+            out[row, 0] = t
+            bad = False
+            for c in range(n_mon):
+                v = 0.0
+                for j in range(mon_ptr[c], mon_ptr[c + 1]):
+                    q = mon_dof[j]
+                    if mon_qty[c] == 0:
+                        v += mon_coef[j] * disp[q]
+                    elif mon_qty[c] == 1:
+                        v += mon_coef[j] * vel[q]
+                    else:
+                        v += mon_coef[j] * acc[q]
+                out[row, 1 + c] = v
+                if mon_qty[c] == 0 and not (abs(v) < blowup_m):
+                    bad = True
+            row += 1
+            if bad:
+                return step
+        if step % 1000 == 0:
+            for i in range(packed.n_diag):
+                if not (abs(disp[i]) < blowup_m):
+                    return step
+    return -1

@@ -1,0 +1,214 @@
+"""Numba kernels of the track-bridge structure: forces, rail point kinematics and loads, Zhai step.
+
+The structure is linear: M a + C v + K u = f. Its arrays are packed in :class:`StructurePacked`
+(built by :mod:`ttbpipe.structure.assembly`); the kernels evaluate K u and C v element by
+element (no global matrix in the time loop):
+
+* beams (both rails and the slab): Hermite cubic bending in the vertical and lateral planes and
+  linear torsion, per-element E*I and G*K (paper eqs. 12-13);
+* links: every discrete or lumped spring-damper (rail pads, CA mortar, sleepers and ballast,
+  bearings, piers) as a relative displacement d = sum_j coef_j u_{dof_j}, force k d + c d', and the
+  transposed scatter (paper eqs. 22-27 with the shape functions folded into coef);
+* girder spans: a dense reduced block per span (Craig-Bampton boundary + fixed-interface modal
+  coordinates) with its own K, Rayleigh C (eq. 18) and the inverse of its mass block.
+
+DOFs ``[0, n_diag)`` have a diagonal (lumped) mass; the span blocks follow.
+Node layout of beams (5 DOF): z, dz/dx, y, dy/dx, roll. See docs/dev/structure_interface.md.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+StructurePacked = namedtuple("StructurePacked", [
+    "n_dof", "n_diag", "inv_mass",
+    "beam_dof_a", "beam_dof_b", "beam_L", "beam_EIv", "beam_EIl", "beam_GK",
+    "link_ptr", "link_dof", "link_coef", "link_k", "link_c",
+    "span_dof0", "span_n", "span_mat0", "span_K", "span_C", "span_Minv", "span_scratch",
+    "n_rails", "rail_x0", "rail_dx", "rail_n_nodes", "rail_dof0",
+])
+
+
+@njit(cache=True)
+def _beam_forces(packed, disp, vel, force):
+    """Subtract the elastic forces K_e u_e of every beam element (rails and slab) from ``force``.
+
+    Hermite element, slopes as DOFs: k = EI/L^3 [[12, 6L, -12, 6L], [6L, 4L^2, -6L, 2L^2],
+    [-12, -6L, 12, -6L], [6L, 2L^2, -6L, 4L^2]] (Przemieniecki 1968; paper eq. 13), the same
+    matrix for the vertical (EIv) and lateral (EIl) planes; torsion GK/L [[1, -1], [-1, 1]].
+    Beams carry no internal damping (pads and CA carry it).
+    """
+    n_beam = packed.beam_L.shape[0]
+    for e in range(n_beam):
+        a = packed.beam_dof_a[e]
+        b = packed.beam_dof_b[e]
+        L = packed.beam_L[e]
+        for plane in range(2):
+            off = 2 * plane
+            EI = packed.beam_EIv[e] if plane == 0 else packed.beam_EIl[e]
+            s = EI / (L * L * L)
+            w1 = disp[a + off]
+            t1 = disp[a + off + 1]
+            w2 = disp[b + off]
+            t2 = disp[b + off + 1]
+            dw = w1 - w2
+            f1 = s * (12.0 * dw + 6.0 * L * (t1 + t2))
+            m1 = s * L * (6.0 * dw + L * (4.0 * t1 + 2.0 * t2))
+            m2 = s * L * (6.0 * dw + L * (2.0 * t1 + 4.0 * t2))
+            force[a + off] -= f1
+            force[a + off + 1] -= m1
+            force[b + off] += f1
+            force[b + off + 1] -= m2
+        kt = packed.beam_GK[e] / L * (disp[a + 4] - disp[b + 4])
+        force[a + 4] -= kt
+        force[b + 4] += kt
+
+
+@njit(cache=True)
+def _link_forces(packed, disp, vel, force):
+    """Subtract the forces of every spring-damper link from ``force``.
+
+    Link l: relative displacement d = sum_j coef_j u[dof_j] (and d' likewise from ``vel``); force
+    p = k d + c d'; generalised forces coef_j * p are subtracted (virtual work, paper eq. 4).
+    """
+    n_link = packed.link_k.shape[0]
+    for l in range(n_link):
+        j0 = packed.link_ptr[l]
+        j1 = packed.link_ptr[l + 1]
+        d = 0.0
+        v = 0.0
+        for j in range(j0, j1):
+            q = packed.link_dof[j]
+            c = packed.link_coef[j]
+            d += c * disp[q]
+            v += c * vel[q]
+        p = packed.link_k[l] * d + packed.link_c[l] * v
+        for j in range(j0, j1):
+            force[packed.link_dof[j]] -= packed.link_coef[j] * p
+
+
+@njit(cache=True)
+def _structure_accelerations(packed, disp, vel, nodal_force, acc_out):
+    """acc_out = M^-1 (nodal_force - K disp - C vel) for the whole structure.
+
+    ``nodal_force`` holds the external loads only and is not modified. Diagonal-mass DOFs use
+    ``inv_mass`` (0 for fixed DOFs); each girder span block uses its dense inverse mass.
+    """
+    n = packed.n_dof
+    for i in range(n):
+        acc_out[i] = nodal_force[i]
+    _beam_forces(packed, disp, vel, acc_out)
+    _link_forces(packed, disp, vel, acc_out)
+    for i in range(packed.n_diag):
+        acc_out[i] *= packed.inv_mass[i]
+    tmp = packed.span_scratch
+    for s in range(packed.span_dof0.shape[0]):
+        o = packed.span_dof0[s]
+        m = packed.span_n[s]
+        base = packed.span_mat0[s]
+        for i in range(m):
+            f = acc_out[o + i]
+            row = base + i * m
+            for j in range(m):
+                f -= packed.span_K[row + j] * disp[o + j] + packed.span_C[row + j] * vel[o + j]
+            tmp[i] = f
+        for i in range(m):
+            row = base + i * m
+            a = 0.0
+            for j in range(m):
+                a += packed.span_Minv[row + j] * tmp[j]
+            acc_out[o + i] = a
+
+
+@njit(cache=True)
+def _rail_locate(packed, x):
+    """Element index and local coordinate xi in [0, 1] of abscissa x on the rails (-1 outside)."""
+    if packed.n_rails == 0:
+        return -1, 0.0
+    s = (x - packed.rail_x0) / packed.rail_dx
+    n_el = packed.rail_n_nodes - 1
+    if s < 0.0 or s > n_el:
+        return -1, 0.0
+    e = int(s)
+    if e >= n_el:
+        e = n_el - 1
+    return e, s - e
+
+
+@njit(cache=True)
+def _hermite(xi, L):
+    """Hermite cubic shape functions (N1, N2, N3, N4) with slope DOFs (paper's N_Zr/N_Yr)."""
+    xi2 = xi * xi
+    xi3 = xi2 * xi
+    return (1.0 - 3.0 * xi2 + 2.0 * xi3, L * (xi - 2.0 * xi2 + xi3),
+            3.0 * xi2 - 2.0 * xi3, L * (xi3 - xi2))
+
+
+@njit(cache=True)
+def _rail_point_kinematics(packed, rail, x, disp, vel):
+    """(z, dz/dt, y, dy/dt, roll, droll/dt) of rail ``rail`` at abscissa x (zeros outside).
+
+    Hermite interpolation for z and y, linear for roll, within the element containing x.
+    """
+    e, xi = _rail_locate(packed, x)
+    if e < 0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    L = packed.rail_dx
+    a = packed.rail_dof0[rail] + 5 * e
+    b = a + 5
+    n1, n2, n3, n4 = _hermite(xi, L)
+    z = n1 * disp[a] + n2 * disp[a + 1] + n3 * disp[b] + n4 * disp[b + 1]
+    vz = n1 * vel[a] + n2 * vel[a + 1] + n3 * vel[b] + n4 * vel[b + 1]
+    y = n1 * disp[a + 2] + n2 * disp[a + 3] + n3 * disp[b + 2] + n4 * disp[b + 3]
+    vy = n1 * vel[a + 2] + n2 * vel[a + 3] + n3 * vel[b + 2] + n4 * vel[b + 3]
+    r = (1.0 - xi) * disp[a + 4] + xi * disp[b + 4]
+    vr = (1.0 - xi) * vel[a + 4] + xi * vel[b + 4]
+    return z, vz, y, vy, r, vr
+
+
+@njit(cache=True)
+def _add_rail_point_force(packed, rail, x, Fz, Fy, Mx, nodal_force):
+    """Add the consistent nodal loads of a point force (Fz, Fy) and moment Mx on rail ``rail`` at x.
+
+    Transpose of :func:`_rail_point_kinematics` (virtual work); nothing is added outside the rail.
+    """
+    e, xi = _rail_locate(packed, x)
+    if e < 0:
+        return
+    L = packed.rail_dx
+    a = packed.rail_dof0[rail] + 5 * e
+    b = a + 5
+    n1, n2, n3, n4 = _hermite(xi, L)
+    nodal_force[a] += n1 * Fz
+    nodal_force[a + 1] += n2 * Fz
+    nodal_force[b] += n3 * Fz
+    nodal_force[b + 1] += n4 * Fz
+    nodal_force[a + 2] += n1 * Fy
+    nodal_force[a + 3] += n2 * Fy
+    nodal_force[b + 2] += n3 * Fy
+    nodal_force[b + 3] += n4 * Fy
+    nodal_force[a + 4] += (1.0 - xi) * Mx
+    nodal_force[b + 4] += xi * Mx
+
+
+@njit(cache=True)
+def _zhai_predict(disp, vel, acc, acc_prev, dt, psi, phi):
+    """Zhai's explicit two-step update of displacement and velocity, in place.
+
+    X_{n+1} = X_n + V_n dt + (1/2 + psi) A_n dt^2 - psi A_{n-1} dt^2,
+    V_{n+1} = V_n + (1 + phi) A_n dt - phi A_{n-1} dt   (Zhai 1996, IJNME 39:4199;
+    physics.md section 5). psi = phi = 0 on the first step, 1/2 afterwards.
+    """
+    h2 = dt * dt
+    ca = (0.5 + psi) * h2
+    cp = psi * h2
+    va = (1.0 + phi) * dt
+    vp = phi * dt
+    for i in range(disp.shape[0]):
+        a = acc[i]
+        ap = acc_prev[i]
+        disp[i] += vel[i] * dt + ca * a - cp * ap
+        vel[i] += va * a - vp * ap

@@ -1,0 +1,197 @@
+"""Moving point loads on the structure (validation without a vehicle) and the run driver.
+
+Loads enter the rails through the Hermite shape functions of the element they are in
+(:func:`~ttbpipe.structure.kernels._add_rail_point_force`), exactly as the vehicle's contact
+forces do. For girder-only validation models (``layout.bridge_track: none``) the loads act on the
+girder axis through the span's reduced basis instead (``loads.target: girder``).
+
+Sign convention: forces in the structure's axes (z up, y left); a wheel pressing on the rail is
+``Fz_N < 0``. ``axle_train.wheel_load_N`` is given as a positive magnitude and applied downwards.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from .integrator import _run_moving_loads, check_time_step, stable_time_step
+from .kernels import _structure_accelerations
+from .monitors import compile_monitors, default_monitors
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class LoadSet:
+    """Moving loads as arrays (n loads): rail, x at t=0, speed, constant and harmonic forces."""
+
+    rail: np.ndarray
+    x0: np.ndarray
+    speed: np.ndarray
+    F0: np.ndarray      # (n, 3): Fz, Fy, Mx
+    F1: np.ndarray      # (n, 3): harmonic amplitudes
+    freq: np.ndarray
+    phase: np.ndarray
+    target: str = "rail"
+
+    @property
+    def n(self) -> int:
+        return self.rail.size
+
+
+def axle_offsets(train: Mapping[str, Any]) -> np.ndarray:
+    """Axle distances behind the first axle (m) from ``axle_positions_m`` or a car layout.
+
+    Car layout (each car: two bogies at +- bogie_centre_distance/2 about the car centre, two axles
+    per bogie at +- wheelbase/2): ``cars``, ``car_length_m``, ``bogie_centre_distance_m``,
+    ``wheelbase_m``. Default: CRH-type 25 m cars, 17.5 m bogie centres, 2.5 m wheelbase
+    (physics.md section 6: 17.375 m; rounded to the car layout).
+    """
+    if "axle_positions_m" in train:
+        pos = np.asarray(train["axle_positions_m"], dtype=float)
+    else:
+        cars = int(train.get("cars", 1))
+        Lc = float(train.get("car_length_m", 25.0))
+        bc = float(train.get("bogie_centre_distance_m", 17.375))
+        wb = float(train.get("wheelbase_m", 2.5))
+        local = np.array([-bc / 2 - wb / 2, -bc / 2 + wb / 2, bc / 2 - wb / 2, bc / 2 + wb / 2])
+        pos = np.concatenate([c * Lc + Lc / 2 + local for c in range(cars)])
+    pos = np.sort(pos - pos.min())
+    return pos
+
+
+def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
+    """LoadSet from the ``loads:`` section of a case config."""
+    speed_default = float(loads_cfg.get("speed_kmh", 0.0)) / 3.6
+    rows = []
+    for i, p in enumerate(loads_cfg.get("point_loads") or []):
+        where = f"loads.point_loads[{i}]"
+        rail = int(p.get("rail", 0))
+        if rail not in (0, 1):
+            raise ValueError(f"{where}.rail: {rail}; expected 0 (left) or 1 (right)")
+        h = p.get("harmonic") or {}
+        rows.append((rail, float(p.get("x0_m", 0.0)),
+                     float(p["speed_kmh"]) / 3.6 if "speed_kmh" in p else speed_default,
+                     [float(p.get("Fz_N", 0.0)), float(p.get("Fy_N", 0.0)),
+                      float(p.get("Mx_Nm", 0.0))],
+                     [float(h.get("Fz_amplitude_N", 0.0)), float(h.get("Fy_amplitude_N", 0.0)),
+                      float(h.get("Mx_amplitude_Nm", 0.0))],
+                     float(h.get("frequency_hz", 0.0)), float(h.get("phase_rad", 0.0))))
+    train = loads_cfg.get("axle_train")
+    if train:
+        offsets = axle_offsets(train)
+        x_front = float(train.get("front_x0_m", 0.0))
+        P = float(train["wheel_load_N"])
+        v = float(train["speed_kmh"]) / 3.6 if "speed_kmh" in train else speed_default
+        for d in offsets:
+            for rail in (0, 1):
+                rows.append((rail, x_front - d, v, [-P, 0.0, 0.0], [0.0, 0.0, 0.0], 0.0, 0.0))
+    if not rows:
+        raise ValueError("loads: no loads; give loads.point_loads and/or loads.axle_train")
+    target = loads_cfg.get("target", "rail" if model.packed.n_rails else "girder")
+    if target not in ("rail", "girder"):
+        raise ValueError(f"loads.target: {target!r}; expected rail | girder")
+    if target == "rail" and model.packed.n_rails == 0:
+        raise ValueError("loads.target: rail, but the structure has no track "
+                         "(layout.bridge_track: none); use target: girder")
+    return LoadSet(rail=np.array([r[0] for r in rows], np.int64),
+                   x0=np.array([r[1] for r in rows]), speed=np.array([r[2] for r in rows]),
+                   F0=np.array([r[3] for r in rows]), F1=np.array([r[4] for r in rows]),
+                   freq=np.array([r[5] for r in rows]), phase=np.array([r[6] for r in rows]),
+                   target=target)
+
+
+def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
+    """(dofs, table (n_steps+1, n)) of generalised girder forces of loads acting on the girder.
+
+    The load's lateral position (rail) is ignored: it acts on the girder axis (Fz, Fy, Mx).
+    """
+    spans = model.spans
+    off = model.dof_info["span_dof0"]
+    dofs = np.concatenate([np.arange(o, o + s.n) for o, s in zip(off, spans)]).astype(np.int64)
+    table = np.zeros((n_steps + 1, dofs.size))
+    col0 = np.cumsum([0] + [s.n for s in spans])
+    for step in range(n_steps + 1):
+        t = step * dt
+        for i in range(loads.n):
+            x = loads.x0[i] + loads.speed[i] * t
+            F = loads.F0[i] + loads.F1[i] * np.sin(2 * np.pi * loads.freq[i] * t + loads.phase[i])
+            for s, red in enumerate(spans):
+                if red.start_m <= x <= red.start_m + red.length_m:
+                    rz, ry, rr = red.rows_at(x)
+                    table[step, col0[s]:col0[s + 1]] += rz * F[0] + ry * F[1] + rr * F[2]
+                    break
+    return dofs, table
+
+
+def default_duration(model, loads: LoadSet) -> float:
+    """Time until the last load has left the structure's far end (or 1 s for static loads)."""
+    x_end = model.layout.total_m
+    moving = loads.speed > 0
+    if not np.any(moving):
+        return 1.0
+    return float(np.max((x_end - loads.x0[moving]) / loads.speed[moving]))
+
+
+def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=None,
+             output_every: int = 1, check_dt: bool = True, blowup_m: float = 1.0):
+    """Run the moving-load case; returns (DataFrame of monitors with time_s, info dict).
+
+    Raises FloatingPointError naming the remedy on blow-up (NaN or a displacement > blowup_m).
+    """
+    if dt <= 0 or duration <= 0:
+        raise ValueError(f"time step {dt} s and duration {duration} s must be > 0")
+    info: dict[str, Any] = {}
+    if check_dt:
+        info["stability"] = check_time_step(model, dt)
+    specs = default_monitors(model) if monitor_specs is None else monitor_specs
+    mons = compile_monitors(model, specs)
+    n_steps = int(round(duration / dt))
+    output_every = max(1, int(output_every))
+    n_out = n_steps // output_every + 1
+    out = np.zeros((n_out, 1 + mons.n))
+    n = model.n_dof
+    disp, vel, acc, acc_prev, nf = (np.zeros(n) for _ in range(5))
+    if loads.target == "girder":
+        extra_dofs, extra = girder_force_table(model, loads, dt, n_steps)
+        rails = np.zeros(0, np.int64)
+        empty = np.zeros(0)
+        load_args = (rails, empty, empty, np.zeros((0, 3)), np.zeros((0, 3)), empty, empty)
+    else:
+        extra_dofs, extra = np.zeros(0, np.int64), np.zeros((1, 0))
+        load_args = (loads.rail, loads.x0, loads.speed, loads.F0, loads.F1, loads.freq,
+                     loads.phase)
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    status = _run_moving_loads(model.packed, *load_args, extra_dofs, extra, float(dt),
+                               n_steps, output_every, mons.ptr, mons.dof, mons.coef, mons.qty,
+                               disp, vel, acc, acc_prev, nf, out, float(blowup_m))
+    wall = time.perf_counter() - t0
+    cpu = time.process_time() - c0
+    if status >= 0:
+        raise FloatingPointError(
+            f"structure response blew up (NaN or |u| > {blowup_m} m) at t={status * dt:.4g} s; "
+            f"reduce simulation.time_step_s (now {dt:g} s; stable limit "
+            f"{stable_time_step(model)['dt_limit_s']:.3g} s) or check the loads' magnitudes")
+    info.update(n_dof=n, n_steps=n_steps, dt_s=dt, wall_s=wall, cpu_s=cpu,
+                wall_s_per_simulated_s=wall / (n_steps * dt),
+                cpu_s_per_simulated_s=cpu / (n_steps * dt))
+    log.info("simulated %.3f s (%d steps of %.3g s, %d DOF) in %.2f s wall (%.2f s per "
+             "simulated s)", n_steps * dt, n_steps, dt, n, wall, info["wall_s_per_simulated_s"])
+    df = pd.DataFrame(out * np.concatenate([[1.0], mons.scale]),
+                      columns=["time_s"] + mons.names)
+    info["final_state"] = (disp, vel, acc)
+    return df, info
+
+
+def static_initial_acceleration(model, nodal_force: np.ndarray) -> np.ndarray:
+    """M^-1 f at rest (helper for callers writing their own loop)."""
+    acc = np.zeros(model.n_dof)
+    z = np.zeros(model.n_dof)
+    _structure_accelerations(model.packed, z, z, nodal_force, acc)
+    return acc

@@ -1,0 +1,186 @@
+"""PSD populations: the per-section spectra of one or more inspection campaigns as one array.
+
+A :class:`PSDPopulation` holds ``psd_mm2_m[section, frequency, channel]`` (one-sided PSD in
+mm²/(1/m), spatial frequency in cycles/m) plus a table naming each section (campaign date,
+section index, start and end chainage). It is built from the long tables that
+``ttbpipe.irregularity.psd.section_psds`` writes (columns ``section, section_start_m,
+section_end_m, channel, spatial_frequency_per_m, psd_mm2_m``).
+
+Equivalent track quality index (TQI): the section's band RMS per channel from the discrete
+Parseval theorem, σ_c = sqrt(Σ_k S_c(n_k)·Δn) (Xu & Zhai, Railway Eng. Sci. 2020, physics.md §3
+step 3).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..channels import SPECTRAL_CHANNELS
+
+__all__ = ["PSDPopulation", "synthetic_population"]
+
+log = logging.getLogger(__name__)
+
+LONG_COLUMNS = ("section", "section_start_m", "section_end_m", "channel",
+                "spatial_frequency_per_m", "psd_mm2_m")
+
+
+@dataclass
+class PSDPopulation:
+    """Per-section PSDs of one or more campaigns on a common frequency grid.
+
+    Attributes
+    ----------
+    psd_mm2_m : ndarray (n_sections, n_frequencies, n_channels)
+        One-sided PSD, mm²/(1/m); finite and > 0.
+    frequency_per_m : ndarray (n_frequencies,)
+        Spatial frequencies, cycles/m, strictly increasing and uniformly spaced.
+    channels : tuple of str
+        Channel names (a subset of :data:`ttbpipe.channels.SPECTRAL_CHANNELS`, in that order).
+    sections : DataFrame
+        One row per section: ``campaign_date`` (str), ``section``, ``section_start_m``,
+        ``section_end_m``.
+    """
+
+    psd_mm2_m: np.ndarray
+    frequency_per_m: np.ndarray
+    channels: tuple[str, ...]
+    sections: pd.DataFrame = field(repr=False)
+
+    def __post_init__(self) -> None:
+        self.psd_mm2_m = np.asarray(self.psd_mm2_m, dtype=float)
+        self.frequency_per_m = np.asarray(self.frequency_per_m, dtype=float)
+        self.channels = tuple(self.channels)
+        n_sec, n_freq, n_ch = self.psd_mm2_m.shape
+        if self.frequency_per_m.shape != (n_freq,) or len(self.channels) != n_ch:
+            raise ValueError(f"PSD array {self.psd_mm2_m.shape} does not match "
+                             f"{self.frequency_per_m.size} frequencies and {len(self.channels)} channels")
+        if len(self.sections) != n_sec:
+            raise ValueError(f"{len(self.sections)} section rows for {n_sec} PSD sections")
+        if n_freq < 2 or np.any(np.diff(self.frequency_per_m) <= 0):
+            raise ValueError("need at least two strictly increasing frequencies")
+        spacing = np.diff(self.frequency_per_m)
+        if not np.allclose(spacing, spacing[0], rtol=1e-6):
+            raise ValueError("the frequency grid must be uniform (a Welch grid) for the Parseval TQI")
+        bad = ~np.isfinite(self.psd_mm2_m) | (self.psd_mm2_m <= 0)
+        if bad.any():
+            s, k, c = np.argwhere(bad)[0]
+            row = self.sections.iloc[s]
+            raise ValueError(
+                f"{int(bad.sum())} PSD values are not finite and > 0; first: campaign "
+                f"{row.get('campaign_date', '?')}, section {row.get('section', s)}, channel "
+                f"{self.channels[c]}, n = {self.frequency_per_m[k]:g} 1/m: check the PSD estimate")
+        self.sections = self.sections.reset_index(drop=True)
+
+    @property
+    def n_sections(self) -> int:
+        return self.psd_mm2_m.shape[0]
+
+    @property
+    def delta_n_per_m(self) -> float:
+        return float(self.frequency_per_m[1] - self.frequency_per_m[0])
+
+    def tqi_mm(self) -> np.ndarray:
+        """Equivalent TQI σ (mm) per section and channel, (n_sections, n_channels).
+
+        Discrete Parseval theorem: σ² = Σ_k S(n_k)·Δn over the population's frequency grid
+        (Xu & Zhai 2020; physics.md §3 step 3).
+        """
+        return np.sqrt(self.psd_mm2_m.sum(axis=1) * self.delta_n_per_m)
+
+    def subset(self, index: Sequence[int]) -> "PSDPopulation":
+        index = np.asarray(index, dtype=int)
+        return PSDPopulation(self.psd_mm2_m[index], self.frequency_per_m, self.channels,
+                             self.sections.iloc[index].reset_index(drop=True))
+
+    @classmethod
+    def from_long_table(cls, table: pd.DataFrame, campaign_date: str = "",
+                        wavelength_band_m: tuple[float, float] | None = None,
+                        source: str = "PSD table") -> "PSDPopulation":
+        """Population of one campaign from a ``section_psds`` long table.
+
+        ``wavelength_band_m = (λmin, λmax)`` keeps frequencies 1/λmax <= n <= 1/λmin only (the
+        band where the estimate and the standards are meaningful; physics.md §7.6-7).
+        """
+        missing = [c for c in LONG_COLUMNS if c not in table.columns]
+        if missing:
+            raise ValueError(f"{source}: missing columns {missing}; expected {list(LONG_COLUMNS)}")
+        table = table.loc[:, list(LONG_COLUMNS)]
+        if wavelength_band_m is not None:
+            lam_min, lam_max = (float(v) for v in wavelength_band_m)
+            n = table["spatial_frequency_per_m"].to_numpy()
+            keep = (n >= (1 / lam_max) * (1 - 1e-9)) & (n <= (1 / lam_min) * (1 + 1e-9))
+            table = table.loc[keep]
+        channels = tuple(c for c in SPECTRAL_CHANNELS if c in set(table["channel"]))
+        unknown = set(table["channel"]) - set(SPECTRAL_CHANNELS)
+        if unknown:
+            raise ValueError(f"{source}: unknown channels {sorted(unknown)}")
+        if table.duplicated(["section", "channel", "spatial_frequency_per_m"]).any():
+            row = int(np.flatnonzero(table.duplicated(["section", "channel",
+                                                       "spatial_frequency_per_m"]))[0])
+            raise ValueError(f"{source}: duplicate (section, channel, frequency) at row {row}")
+        wide = table.pivot(index=["section", "spatial_frequency_per_m"], columns="channel",
+                           values="psd_mm2_m")
+        wide = wide.reindex(columns=list(channels)).sort_index()
+        sections_idx = wide.index.get_level_values(0).unique()
+        freqs = np.sort(wide.index.get_level_values(1).unique().to_numpy(dtype=float))
+        full = pd.MultiIndex.from_product([sections_idx, freqs])
+        if len(wide) != len(full):
+            raise ValueError(f"{source}: sections do not share one frequency grid "
+                             f"({len(wide)} rows, {len(full)} expected)")
+        wide = wide.reindex(full)
+        if wide.isna().any().any():
+            raise ValueError(f"{source}: missing PSD values for some (section, channel, frequency)")
+        psd = wide.to_numpy(dtype=float).reshape(len(sections_idx), freqs.size, len(channels))
+        sec = (table.drop_duplicates("section").set_index("section")
+               .loc[sections_idx, ["section_start_m", "section_end_m"]].reset_index())
+        sec.insert(0, "campaign_date", str(campaign_date))
+        return cls(psd, freqs, channels, sec)
+
+    @classmethod
+    def concat(cls, populations: Iterable["PSDPopulation"]) -> "PSDPopulation":
+        """Stack the sections of several populations (same frequency grid and channels)."""
+        pops = list(populations)
+        if not pops:
+            raise ValueError("no populations to concatenate")
+        first = pops[0]
+        for p in pops[1:]:
+            if p.channels != first.channels or p.frequency_per_m.shape != first.frequency_per_m.shape \
+                    or not np.allclose(p.frequency_per_m, first.frequency_per_m, rtol=1e-9):
+                raise ValueError(f"campaign {p.sections['campaign_date'].iloc[0]!r} has another "
+                                 "frequency grid or channel set; use one psd configuration for all")
+        return cls(np.concatenate([p.psd_mm2_m for p in pops]), first.frequency_per_m,
+                   first.channels, pd.concat([p.sections for p in pops], ignore_index=True))
+
+
+def synthetic_population(n_sections: int, frequency_per_m: np.ndarray, mean_psd: np.ndarray,
+                         rng: np.random.Generator, level_sigma_log: float = 0.4,
+                         channel_correlation: float = 0.7, welch_dof: float | None = 12.0,
+                         channels: Sequence[str] = SPECTRAL_CHANNELS,
+                         campaign_date: str = "synthetic") -> PSDPopulation:
+    """A population with known statistics, for tests and benchmarks.
+
+    S_i(n, c) = mean_psd(n, c) · L_ic · X_inc, with section levels
+    log L_ic ~ N(-σ²/2, σ²) equicorrelated across channels (correlation ``channel_correlation``)
+    so that E[L] = 1, and estimation scatter X ~ χ²_ν/ν (Welch-averaged ordinates,
+    physics.md §2: ≈ χ²_{2K}/2K) independent per ordinate, or X = 1 when ``welch_dof`` is None.
+    Then E[S] = mean_psd and Var[S] = mean_psd²·(E[L²]E[X²] − 1) with E[L²] = exp(σ²) and
+    E[X²] = 1 + 2/ν.
+    """
+    mean_psd = np.asarray(mean_psd, dtype=float)
+    n_ch = len(channels)
+    corr = np.full((n_ch, n_ch), channel_correlation) + (1 - channel_correlation) * np.eye(n_ch)
+    z = rng.multivariate_normal(np.zeros(n_ch), corr, size=n_sections)
+    levels = np.exp(level_sigma_log * z - 0.5 * level_sigma_log ** 2)
+    psd = mean_psd[None, :, :] * levels[:, None, :]
+    if welch_dof is not None:
+        psd = psd * rng.chisquare(welch_dof, size=psd.shape) / welch_dof
+    sections = pd.DataFrame({"campaign_date": campaign_date, "section": np.arange(n_sections),
+                             "section_start_m": np.arange(n_sections) * 1000.0,
+                             "section_end_m": (np.arange(n_sections) + 1) * 1000.0})
+    return PSDPopulation(psd, np.asarray(frequency_per_m, float), tuple(channels), sections)

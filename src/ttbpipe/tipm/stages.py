@@ -1,0 +1,266 @@
+"""Workflow stages of the TIPM: what each Snakemake script of workflow/rules/tipm.smk calls.
+
+Every function takes file paths and the ``tipm:`` / ``psd:`` configuration and returns tables;
+the scripts only read inputs and write outputs. Defaults: :data:`DEFAULTS` (mirrors the ``tipm:``
+section of config/config.yaml).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import logging
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..io import read_table
+from .distribution import fit_ordinate_distributions, summarize_fits
+from .evolution import SpectralEvolution, forecast_coverage
+from .population import PSDPopulation
+from .profiles import (STREAM_FORECAST, STREAM_MONTE_CARLO, STREAM_REPRESENTATIVE, date_key,
+                       profiles_from_psd_sets)
+from .selection import TIPMSelection, TIPMSelector, selection_metrics
+
+__all__ = ["DEFAULTS", "resolve_config", "load_population", "population_dates", "months_between",
+           "select_stage", "profiles_stage", "distribution_stage", "evolution_stage",
+           "forecast_stage", "validation_stage"]
+
+log = logging.getLogger(__name__)
+
+DEFAULTS: dict[str, Any] = {
+    "population_campaigns": "all",
+    "selection": {"method": "copula", "fraction": 0.1, "min_samples": 2, "max_samples": 100,
+                  "match_variance": True},
+    "profiles": {"length_m": 1000.0, "dx_m": 0.25},
+    "evolution": {"n_partitions": 5, "partition_scale": "log", "min_partition_count": 10},
+    "forecast": {"horizons_months": [6, 12], "levels": [0.05, 0.5, 0.95], "monte_carlo_paths": 500},
+    "validation": {"holdout_campaigns": 12, "band": [0.05, 0.95], "monte_carlo_paths": 500},
+}
+
+
+def resolve_config(tipm: Mapping[str, Any] | None) -> dict[str, Any]:
+    """``tipm:`` configuration with missing keys filled from :data:`DEFAULTS`."""
+    tipm = dict(tipm or {})
+    out: dict[str, Any] = {}
+    for key, default in DEFAULTS.items():
+        if isinstance(default, dict):
+            out[key] = {**default, **dict(tipm.get(key) or {})}
+        else:
+            out[key] = tipm.get(key, default)
+    return out
+
+
+def population_dates(all_dates: Sequence[str], date: str, window: str | int) -> list[str]:
+    """Campaigns whose sections form campaign ``date``'s population: every campaign up to and
+    including ``date`` (``window="all"``), or the last ``window`` of them. Never a later one,
+    so a campaign's selection cannot change when a later campaign is added."""
+    earlier = sorted(d for d in all_dates if d <= date)
+    if date not in earlier:
+        raise ValueError(f"campaign {date} is not among the campaigns {list(all_dates)}")
+    if window == "all":
+        return earlier
+    window = int(window)
+    if window < 1:
+        raise ValueError(f"tipm.population_campaigns must be 'all' or >= 1, got {window}")
+    return earlier[-window:]
+
+
+def months_between(a: str, b: str) -> float:
+    """Months from date ``a`` to date ``b`` (calendar months plus the day difference / 30.44)."""
+    da, db = _dt.date.fromisoformat(a), _dt.date.fromisoformat(b)
+    return (db.year - da.year) * 12 + (db.month - da.month) + (db.day - da.day) / (365.25 / 12)
+
+
+def load_population(paths: Sequence[str | Path], wavelength_band_m) -> list[PSDPopulation]:
+    """One population per PSD table ``<date>.parquet`` (the campaign date is the file stem)."""
+    band = None if wavelength_band_m is None else tuple(wavelength_band_m)
+    pops = []
+    for path in sorted(paths, key=lambda p: Path(p).stem):
+        pops.append(PSDPopulation.from_long_table(read_table(path), Path(path).stem, band,
+                                                  source=str(path)))
+    return pops
+
+
+def _selector(cfg: Mapping[str, Any]) -> TIPMSelector:
+    s = cfg["selection"]
+    return TIPMSelector(fraction=s["fraction"], min_samples=s["min_samples"],
+                        max_samples=s.get("max_samples"), method=s["method"],
+                        match_variance=s["match_variance"])
+
+
+def select_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any], psd: Mapping[str, Any]
+                 ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """(representative PSD long table with weights, weights table, fidelity metrics)."""
+    cfg = resolve_config(tipm)
+    population = PSDPopulation.concat(load_population(psd_paths, psd.get("wavelength_band_m")))
+    selection = _selector(cfg).select(population)
+    metrics = selection_metrics(population, selection)
+    for row in metrics.itertuples():
+        log.info("%s: %d of %d sections; max rel. error mean %.2e, std %.2e; RMS KS p = %.3f",
+                 row.channel, row.n_samples, row.n_population, row.max_rel_error_mean,
+                 row.max_rel_error_std, row.rms_ks_pvalue)
+    return selection.to_long_table(), selection.samples, metrics
+
+
+def profiles_stage(selection_table: pd.DataFrame, weights: pd.DataFrame, date: str,
+                   tipm: Mapping[str, Any], psd: Mapping[str, Any], study_seed: int) -> pd.DataFrame:
+    """Space-domain profiles of one campaign's representative sets (stream 0)."""
+    cfg = resolve_config(tipm)
+    selection = TIPMSelection.from_long_table(selection_table, weights)
+    return profiles_from_psd_sets(
+        selection.psd_mm2_m, selection.frequency_per_m, selection.channels,
+        selection.samples["sample_index"].to_list(), length_m=cfg["profiles"]["length_m"],
+        dx_m=cfg["profiles"]["dx_m"], study_seed=study_seed, date=date,
+        stream=STREAM_REPRESENTATIVE, wavelength_band_m=tuple(psd["wavelength_band_m"]))
+
+
+def distribution_stage(psd_paths: Sequence[str | Path], psd: Mapping[str, Any]
+                       ) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(per-frequency fits, per-channel-and-band summary) of a campaign's population."""
+    population = PSDPopulation.concat(load_population(psd_paths, psd.get("wavelength_band_m")))
+    fits = fit_ordinate_distributions(population)
+    return fits, summarize_fits(fits)
+
+
+def _fit_evolution(pops: Sequence[PSDPopulation], cfg: Mapping[str, Any]) -> SpectralEvolution:
+    e = cfg["evolution"]
+    dates = [str(p.sections["campaign_date"].iloc[0]) for p in pops]
+    months = [months_between(dates[0], d) for d in dates]
+    return SpectralEvolution(e["n_partitions"], e["partition_scale"], e["min_partition_count"]
+                             ).fit(pops, months)
+
+
+def evolution_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any],
+                    psd: Mapping[str, Any]) -> tuple[pd.DataFrame, dict]:
+    """(fitted model table, model metadata) from every campaign."""
+    cfg = resolve_config(tipm)
+    model = _fit_evolution(load_population(psd_paths, psd.get("wavelength_band_m")), cfg)
+    return model.to_table(), model.metadata()
+
+
+def forecast_stage(model: SpectralEvolution, selection_table: pd.DataFrame, weights: pd.DataFrame,
+                   base_date: str, tipm: Mapping[str, Any], psd: Mapping[str, Any], study_seed: int
+                   ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """Forecasts of the latest campaign's representative sets at the configured horizons.
+
+    Returns (forecast PSD table, forecast states table (one row per profile), profiles).
+    ``envelope = "fixed_p"``: eq. 56 iterated with the constant index p = level (the states that
+    get profiles); ``envelope = "monte_carlo"``: percentiles of simulated paths (p ~ U(0,1) per
+    step), the calibrated predictive band of docs/tipm.md.
+    """
+    cfg = resolve_config(tipm)
+    f = cfg["forecast"]
+    selection = TIPMSelection.from_long_table(selection_table, weights)
+    if selection.channels != model.channels or selection.frequency_per_m.shape != model.frequency_per_m.shape:
+        raise ValueError("the selection and the evolution model have different channels or "
+                         "frequency grids; rerun both with one psd configuration")
+    horizons = [float(h) for h in f["horizons_months"]]
+    levels = [float(p) for p in f["levels"]]
+    steps = [model.steps_for(h) for h in horizons]
+    rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
+                                                        STREAM_MONTE_CARLO]))
+    mc_band, _ = model.envelope(selection.psd_mm2_m, max(steps), levels, int(f["monte_carlo_paths"]), rng)
+    rows, states, psd_sets = [], [], []
+    base = _dt.date.fromisoformat(base_date)
+    for h, n_steps in zip(horizons, steps):
+        target = _add_months(base, int(round(h))).isoformat()
+        for li, p in enumerate(levels):
+            fixed = model.forecast_fixed(selection.psd_mm2_m, n_steps, p)
+            for envelope, values in (("fixed_p", fixed), ("monte_carlo", mc_band[n_steps - 1, li])):
+                t = TIPMSelection(values, selection.weights, selection.frequency_per_m,
+                                  selection.channels, selection.samples).to_long_table()
+                t.insert(0, "level", p)
+                t.insert(0, "envelope", envelope)
+                t.insert(0, "target_date", target)
+                t.insert(0, "horizon_months", h)
+                rows.append(t)
+            for j, w in zip(selection.samples["sample_index"], selection.weights):
+                states.append({"profile_index": len(states), "horizon_months": h, "target_date": target,
+                               "steps": n_steps, "level": p, "sample_index": int(j), "weight": float(w)})
+            psd_sets.append(fixed)
+    states_df = pd.DataFrame(states)
+    profiles = profiles_from_psd_sets(
+        np.concatenate(psd_sets), selection.frequency_per_m, selection.channels,
+        states_df["profile_index"].to_list(), length_m=cfg["profiles"]["length_m"],
+        dx_m=cfg["profiles"]["dx_m"], study_seed=study_seed, date=base_date,
+        stream=STREAM_FORECAST, wavelength_band_m=tuple(psd["wavelength_band_m"]))
+    profiles = profiles.rename(columns={"sample_index": "profile_index"})
+    return pd.concat(rows, ignore_index=True), states_df, profiles
+
+
+def validation_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any],
+                     psd: Mapping[str, Any], study_seed: int
+                     ) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Any]]:
+    """Hold-out validation of the evolution model, and TQI bands for the figure.
+
+    Fits on all campaigns but the last ``holdout_campaigns``, forecasts from the last fitted
+    campaign to each held-out one and scores the coverage (:func:`forecast_coverage`).
+    Returns (coverage table, TQI table for the figure, summary dict).
+    """
+    cfg = resolve_config(tipm)
+    v = cfg["validation"]
+    pops = load_population(psd_paths, psd.get("wavelength_band_m"))
+    holdout = int(v["holdout_campaigns"])
+    if not 0 < holdout <= len(pops) - 3:
+        raise ValueError(f"validation needs >= 3 fitted campaigns plus {holdout} held out; there are "
+                         f"{len(pops)} campaigns: lower tipm.validation.holdout_campaigns")
+    fitted, held = pops[:-holdout], pops[-holdout:]
+    model = _fit_evolution(fitted, cfg)
+    base = fitted[-1]
+    base_date = str(base.sections["campaign_date"].iloc[0])
+    observed = [(months_between(base_date, str(p.sections["campaign_date"].iloc[0])), p) for p in held]
+    levels = tuple(float(x) for x in v["band"])
+    rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
+                                                        STREAM_MONTE_CARLO, 1]))
+    coverage = forecast_coverage(model, base, observed, levels, int(v["monte_carlo_paths"]), rng)
+    # TQI (band RMS) paths for the figure: observed per section, forecast band per section
+    n_steps = max(model.steps_for(h) for h, _ in observed)
+    rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
+                                                        STREAM_MONTE_CARLO, 2]))
+    _, tqi_band = model.envelope(base.psd_mm2_m, n_steps, (levels[0], 0.5, levels[1]),
+                                 int(v["monte_carlo_paths"]), rng, base.delta_n_per_m)
+    rows = []
+    for p in pops:
+        d = str(p.sections["campaign_date"].iloc[0])
+        tqi = p.tqi_mm()
+        for i, sec in enumerate(p.sections["section_start_m"]):
+            for c, ch in enumerate(p.channels):
+                rows.append({"kind": "observed", "campaign_date": d, "months": months_between(base_date, d),
+                             "section_start_m": float(sec), "channel": ch, "level": np.nan,
+                             "tqi_mm": float(tqi[i, c])})
+    for s in range(n_steps):
+        months = (s + 1) * model.interval_months
+        for li, level in enumerate((levels[0], 0.5, levels[1])):
+            for i, sec in enumerate(base.sections["section_start_m"]):
+                for c, ch in enumerate(base.channels):
+                    rows.append({"kind": "forecast_mc", "campaign_date": "", "months": months,
+                                 "section_start_m": float(sec), "channel": ch, "level": level,
+                                 "tqi_mm": float(tqi_band[s, li, i, c])})
+    for level in (levels[0], 0.5, levels[1]):
+        state = base.psd_mm2_m
+        for s in range(n_steps):
+            state = model.forecast_fixed(state, 1, level)
+            tqi = np.sqrt(state.sum(axis=1) * base.delta_n_per_m)
+            for i, sec in enumerate(base.sections["section_start_m"]):
+                for c, ch in enumerate(base.channels):
+                    rows.append({"kind": "forecast_fixed_p", "campaign_date": "",
+                                 "months": (s + 1) * model.interval_months,
+                                 "section_start_m": float(sec), "channel": ch, "level": level,
+                                 "tqi_mm": float(tqi[i, c])})
+    per_channel = coverage.groupby("channel", sort=False)[["coverage_mc", "coverage_fixed_p"]].mean()
+    summary = {"fitted_campaigns": [str(p.sections["campaign_date"].iloc[0]) for p in fitted],
+               "held_out_campaigns": [str(p.sections["campaign_date"].iloc[0]) for p in held],
+               "nominal_coverage": levels[1] - levels[0],
+               "coverage_mc": per_channel["coverage_mc"].to_dict(),
+               "coverage_fixed_p": per_channel["coverage_fixed_p"].to_dict(),
+               "model": model.metadata()}
+    return coverage, pd.DataFrame(rows), summary
+
+
+def _add_months(date: _dt.date, months: int) -> _dt.date:
+    import calendar
+    index = date.month - 1 + months
+    year, month = date.year + index // 12, index % 12 + 1
+    return _dt.date(year, month, min(date.day, calendar.monthrange(year, month)[1]))

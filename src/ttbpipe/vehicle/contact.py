@@ -1,0 +1,387 @@
+"""Wheel-rail contact: Hertz normal law, contact geometry, Kalker creep, Shen-Hedrick-Elkins, flange.
+
+Formulas and sources (physics.md section 4 unless stated):
+
+* Hertz normal force P = (dZ/G)^1.5 for dZ > 0, else 0 (loss of contact), with
+  G = 4.57 R^-0.149 1e-8 (conical tread) or 3.86 R^-0.115 1e-8 (worn/LM tread), R the wheel
+  radius in m, G in m/N^(2/3) (Zhai's empirical fit of Hertz theory).
+* Contact ellipse (Hertz theory; Johnson, Contact Mechanics, 1985, eqs. 4.36-4.40): with
+  relative curvatures A (rolling direction x) and B (lateral y), A + B = 1/2 sum 1/R, the
+  eccentricity e solves B/A = [E(e)/(1-e^2) - K(e)] / [K(e) - E(e)] (A < B; swap otherwise), and
+  a_x = m c, b_y = n c with c = [3 N (1 - nu^2) / (2 E (A + B))]^(1/3),
+  m^3 = 2 (K - E)(A + B) / (pi A e^2) for the major axis. Elliptic integrals from scipy (table
+  building only); the run-time kernels use the tabulated m, n.
+* Kalker linear theory: G_s = E / 2(1 + nu); f11 = G_s ab C11, f22 = G_s ab C22,
+  f23 = G_s (ab)^1.5 C23, f33 = G_s (ab)^2 C33; F_x = -f11 xi_x, F_y = -f22 xi_y - f23 xi_sp,
+  M_z = f23 xi_y - f33 xi_sp (spin in rad/m). Coefficients: Kalker's table for nu = 0.25
+  (CONTACT ``linrol`` / Kalker 1967 Table E.3); the C23 value at a/b = 0.8 is printed 1.15 in
+  physics.md and is corrected to 1.25 here (the printed value breaks the monotone trend of its
+  neighbours 1.14 and 1.36; classic bug 9).
+* Shen-Hedrick-Elkins (1983) saturation: beta = |F| / (mu N); F' = mu N (beta - beta^2/3 +
+  beta^3/27) for beta <= 3, else mu N; F_x, F_y and M_z are scaled by F'/|F|.
+* Flange contact: a stiff lateral spring beyond the flange clearance,
+  F = -k_f (y_rel - delta_f) for y_rel > delta_f (Knudsen, Feldberg & True 1991, "Bifurcations
+  and chaos in a model of a rolling railway wheelset", Phil. Trans. R. Soc. A 338: delta_f =
+  9.1 mm, k_f = 1.823e7 N/m [M]).
+
+Geometry tables: a contact-geometry table gives, for the LEFT wheel as a function of the
+relative lateral displacement y_rel = y_wheelset - y_rail (m, + left), the rolling radius r, the
+change dz of the rigid wheel-rail gap (how much the wheel's contact point drops below its nominal
+height: positive means more penetration), the contact angle delta (positive: the normal on the
+wheel points up and towards the track centre), the ellipse coefficients m, n, the curvature sum
+A + B and the four Kalker coefficients. The right wheel uses the same table at -y_rel (left/right
+mirror symmetry of the profile pair). A conical tread gives r = r0 + lambda y, dz = lambda y,
+delta = atan(lambda).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+from scipy.optimize import brentq
+from scipy.special import ellipe, ellipk
+
+from .parameters import ContactParameters
+
+log = logging.getLogger(__name__)
+
+# ---------------------------------------------------------------------------------------------
+# Kalker coefficients, nu = 0.25, vs t: t = a/b for a/b <= 1, t = 2 - b/a for a/b > 1.
+# ---------------------------------------------------------------------------------------------
+_AB = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0])
+_BA = np.array([0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1])
+KALKER_T = np.concatenate([_AB, 2.0 - _BA])
+KALKER_C11 = np.array([3.31, 3.37, 3.44, 3.53, 3.62, 3.72, 3.81, 3.91, 4.01, 4.12,
+                       4.22, 4.36, 4.54, 4.78, 5.10, 5.57, 6.34, 7.78, 11.7])
+KALKER_C22 = np.array([2.52, 2.63, 2.75, 2.88, 3.01, 3.14, 3.28, 3.41, 3.54, 3.67,
+                       3.81, 3.99, 4.21, 4.50, 4.90, 5.48, 6.40, 8.14, 12.8])
+KALKER_C23 = np.array([0.473, 0.603, 0.715, 0.823, 0.929, 1.03, 1.14, 1.25, 1.36, 1.47,
+                       1.59, 1.75, 1.95, 2.23, 2.62, 3.24, 4.32, 6.63, 14.6])  # 1.25: typo fix
+KALKER_C33 = np.array([8.28, 4.27, 2.96, 2.32, 1.93, 1.68, 1.50, 1.37, 1.27, 1.19,
+                       1.11, 1.04, 0.965, 0.892, 0.819, 0.747, 0.674, 0.601, 0.526])
+
+
+def kalker_coefficients(a_over_b: float) -> tuple[float, float, float, float]:
+    """C11, C22, C23, C33 (nu = 0.25) at semi-axis ratio a/b (a along the rolling direction).
+
+    Linear interpolation in t (t = a/b up to 1, 2 - b/a beyond), clamped to the tabulated range
+    0.1 <= a/b <= 10 (an ellipse outside it is logged by the caller).
+    """
+    t = a_over_b if a_over_b <= 1.0 else 2.0 - 1.0 / a_over_b
+    t = float(np.clip(t, KALKER_T[0], KALKER_T[-1]))
+    return tuple(float(np.interp(t, KALKER_T, c)) for c in (KALKER_C11, KALKER_C22, KALKER_C23, KALKER_C33))
+
+
+# ---------------------------------------------------------------------------------------------
+# Hertz
+# ---------------------------------------------------------------------------------------------
+def hertz_g(wheel_radius: float, tread: str = "cone") -> float:
+    """Hertz flexibility constant G (m/N^(2/3)) for a conical or worn (LM) tread (Zhai)."""
+    if tread == "cone":
+        return 4.57e-8 * wheel_radius ** -0.149
+    if tread == "worn":
+        return 3.86e-8 * wheel_radius ** -0.115
+    raise ValueError(f"tread must be 'cone' or 'worn', got {tread!r}")
+
+
+@njit(cache=True)
+def _hertz_force(penetration: float, g: float) -> float:
+    """Hertz normal force (N) for a penetration (m); 0 when the wheel has left the rail."""
+    if penetration <= 0.0:
+        return 0.0
+    return (penetration / g) ** 1.5
+
+
+def hertz_ellipse_mn(curv_a: float, curv_b: float) -> tuple[float, float]:
+    """Hertz coefficients (m_x, n_y) of the semi-axes along x (curvature A) and y (curvature B).
+
+    Semi-axes are m_x c and n_y c with c = [3 N (1 - nu^2) / (2 E (A + B))]^(1/3). Johnson eqs.
+    4.36-4.40; the elliptic integrals use scipy's parameter m = e^2.
+    """
+    if curv_a <= 0 or curv_b <= 0:
+        raise ValueError(f"relative curvatures must be positive, got A={curv_a}, B={curv_b}")
+    small, large = min(curv_a, curv_b), max(curv_a, curv_b)
+    ratio = large / small
+    if abs(ratio - 1.0) < 1e-10:
+        return 1.0, 1.0
+
+    def residual(e2: float) -> float:
+        k, e = ellipk(e2), ellipe(e2)
+        return (e / (1.0 - e2) - k) / (k - e) - ratio
+
+    e2 = brentq(residual, 1e-12, 1.0 - 1e-14, xtol=1e-15, rtol=1e-14, maxiter=500)
+    k, e = ellipk(e2), ellipe(e2)
+    major = (2.0 * (k - e) * (small + large) / (np.pi * small * e2)) ** (1.0 / 3.0)
+    minor = major * np.sqrt(1.0 - e2)
+    # the major semi-axis lies along the direction of the smaller curvature
+    return (major, minor) if curv_a <= curv_b else (minor, major)
+
+
+# ---------------------------------------------------------------------------------------------
+# Geometry tables
+# ---------------------------------------------------------------------------------------------
+COL_Y, COL_R, COL_DZ, COL_DELTA, COL_M, COL_N, COL_ABSUM, COL_C11, COL_C22, COL_C23, COL_C33 = range(11)
+N_COLS = 11
+
+
+@dataclass
+class ContactGeometry:
+    """Left-wheel contact-geometry table on a uniform y_rel grid plus the scalar contact constants."""
+
+    table: np.ndarray          # (n, 11), columns COL_*
+    hertz_g: float
+    shear_modulus: float
+    youngs_modulus: float
+    poisson: float
+    friction: float
+    wheel_radius: float
+    contact_half_distance: float
+    flange_clearance: float
+    flange_stiffness: float
+    rail_head_height: float
+    description: str
+
+    @property
+    def y_grid(self) -> np.ndarray:
+        return self.table[:, COL_Y]
+
+    def scalars(self) -> np.ndarray:
+        """Scalar constants packed for the kernels (order fixed by :data:`SCALAR_NAMES`)."""
+        return np.array([self.hertz_g, self.shear_modulus, self.youngs_modulus, self.poisson,
+                         self.friction, self.wheel_radius, self.contact_half_distance,
+                         self.flange_clearance, self.flange_stiffness, self.rail_head_height])
+
+
+SCALAR_NAMES = ("hertz_g", "shear_modulus", "youngs_modulus", "poisson", "friction", "wheel_radius",
+                "contact_half_distance", "flange_clearance", "flange_stiffness", "rail_head_height")
+
+
+def _fill_ellipse_and_kalker(table: np.ndarray, wheel_transverse_radius: np.ndarray,
+                             rail_head_radius: float) -> None:
+    """Columns m, n, A+B and C11..C33 from the rolling radius and the transverse radii."""
+    for i in range(table.shape[0]):
+        curv_a = 0.5 / table[i, COL_R]                           # wheel rolling, rail straight
+        curv_b = 0.5 * (1.0 / rail_head_radius + 1.0 / wheel_transverse_radius[i])
+        if curv_b <= 0:
+            raise ValueError(f"contact table row {i}: non-positive lateral curvature sum {curv_b}"
+                             " (wheel hollow tighter than the rail head: conformal contact)")
+        m, n = hertz_ellipse_mn(curv_a, curv_b)
+        table[i, COL_M], table[i, COL_N], table[i, COL_ABSUM] = m, n, curv_a + curv_b
+        table[i, COL_C11:COL_C33 + 1] = kalker_coefficients(m / n)
+
+
+def conical_geometry(p: ContactParameters, half_range: float = 0.03, n: int = 61) -> ContactGeometry:
+    """Geometry table of a conical tread with conicity lambda on a rail head of radius R_r."""
+    y = np.linspace(-half_range, half_range, n)
+    table = np.zeros((n, N_COLS))
+    table[:, COL_Y] = y
+    table[:, COL_R] = p.wheel_radius + p.conicity * y
+    table[:, COL_DZ] = p.conicity * y
+    table[:, COL_DELTA] = np.arctan(p.conicity)
+    _fill_ellipse_and_kalker(table, np.full(n, p.wheel_transverse_radius), p.rail_head_radius)
+    tread = "cone" if p.hertz_law in ("auto", "cone") else "worn"
+    return _geometry(table, p, tread, f"conical tread, conicity {p.conicity}")
+
+
+def demo_worn_table(p: ContactParameters, half_range: float = 0.03, n: int = 121,
+                    hollow_radius: float = 0.50, nominal_angle: float = 1.0 / 40.0) -> np.ndarray:
+    """Demonstration geometry of a worn (hollow) tread on a crowned rail head, by exact circles.
+
+    Not a measured profile pair: the wheel tread is a concave circular arc of radius
+    R_w = ``hollow_radius`` (a worn, hollow tread) and the rail head a convex arc of radius
+    R_r = ``p.rail_head_radius``; at y_rel = 0 they touch with contact angle ``nominal_angle``
+    (1:40 rail cant). Two arcs in internal tangency touch on the line through both centres
+    (distance D = R_w - R_r), so for a lateral shift y of the wheel
+
+        sin delta = sin delta0 + y / D,
+        rolling radius r = r0 + R_w (cos delta0 - cos delta)   (contact point moves on the tread),
+        gap change dz = D (cos delta0 - cos delta)              (= dr minus the drop on the crown).
+
+    The equivalent conicity is about delta0 R_w / D = 0.0625 for the defaults, that of a
+    moderately worn wheel (EN 15302 range for worn wheels 0.05-0.4 [M]). Returns the columns
+    y, r, dz, delta, wheel transverse radius (negative: concave).
+    """
+    rw, rr, r0 = hollow_radius, p.rail_head_radius, p.wheel_radius
+    if rw <= rr:
+        raise ValueError("hollow_radius must exceed the rail head radius (non-conformal contact)")
+    y = np.linspace(-half_range, half_range, n)
+    d = rw - rr
+    sin_d = np.sin(nominal_angle) + y / d
+    if np.any(np.abs(sin_d) >= 1):
+        raise ValueError("demo table range too wide for the chosen radii")
+    delta = np.arcsin(sin_d)
+    r = r0 + rw * (np.cos(nominal_angle) - np.cos(delta))
+    dz = d * (np.cos(nominal_angle) - np.cos(delta))
+    return np.column_stack([y, r, dz, delta, np.full(n, -rw)])
+
+
+def table_geometry(p: ContactParameters) -> ContactGeometry:
+    """Geometry from a tabulated profile pair (CSV/Parquet) or the demonstration worn table.
+
+    File columns: ``y_rel_m``, ``rolling_radius_m``, ``gap_change_m``, ``contact_angle_rad``,
+    ``wheel_transverse_radius_m`` (negative for a concave tread), for the LEFT wheel, on a uniform
+    increasing grid.
+    """
+    if p.profile_table:
+        import pandas as pd
+        path = Path(p.profile_table)
+        df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+        cols = ["y_rel_m", "rolling_radius_m", "gap_change_m", "contact_angle_rad",
+                "wheel_transverse_radius_m"]
+        missing = [c for c in cols if c not in df.columns]
+        if missing:
+            raise ValueError(f"{path}: missing column(s) {missing}")
+        raw = df[cols].to_numpy(float)
+        bad = np.argwhere(~np.isfinite(raw))
+        if bad.size:
+            raise ValueError(f"{path}: non-finite value at row {bad[0, 0]}, column {cols[bad[0, 1]]}")
+        steps = np.diff(raw[:, 0])
+        if np.any(steps <= 0) or np.ptp(steps) > 1e-9 * max(1.0, abs(steps.mean())) + 1e-12:
+            raise ValueError(f"{path}: column y_rel_m must be uniform and increasing")
+        desc = f"profile table {path}"
+    else:
+        raw = demo_worn_table(p)
+        desc = "demonstration worn-tread table (hollow arc R 0.5 m on rail head R 0.3 m)"
+    n = raw.shape[0]
+    table = np.zeros((n, N_COLS))
+    table[:, COL_Y], table[:, COL_R], table[:, COL_DZ], table[:, COL_DELTA] = raw[:, 0], raw[:, 1], raw[:, 2], raw[:, 3]
+    _fill_ellipse_and_kalker(table, raw[:, 4], p.rail_head_radius)
+    tread = "worn" if p.hertz_law in ("auto", "worn") else "cone"
+    return _geometry(table, p, tread, desc)
+
+
+def _geometry(table: np.ndarray, p: ContactParameters, tread: str, desc: str) -> ContactGeometry:
+    return ContactGeometry(
+        table=np.ascontiguousarray(table), hertz_g=hertz_g(p.wheel_radius, tread),
+        shear_modulus=p.youngs_modulus / (2.0 * (1.0 + p.poisson)), youngs_modulus=p.youngs_modulus,
+        poisson=p.poisson, friction=p.friction, wheel_radius=p.wheel_radius,
+        contact_half_distance=p.contact_half_distance, flange_clearance=p.flange_clearance,
+        flange_stiffness=p.flange_stiffness, rail_head_height=p.rail_head_height, description=desc)
+
+
+def build_geometry(p: ContactParameters) -> ContactGeometry:
+    """Contact geometry for the configured profile (conical or table)."""
+    return conical_geometry(p) if p.profile == "conical" else table_geometry(p)
+
+
+def equivalent_conicity(geom: ContactGeometry, amplitude: float = 0.003) -> float:
+    """(r_L - r_R) / (2 y) at y = amplitude, the quasi-linear equivalent conicity (simplified EN 15302)."""
+    y, r = geom.table[:, COL_Y], geom.table[:, COL_R]
+    return float((np.interp(amplitude, y, r) - np.interp(-amplitude, y, r)) / (2 * amplitude))
+
+
+# ---------------------------------------------------------------------------------------------
+# Kernels
+# ---------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _she_factor(creep_x: float, creep_y: float, friction: float, normal: float) -> float:
+    """Shen-Hedrick-Elkins scale factor F'/F for the linear creep force (F_x, F_y)."""
+    total = np.sqrt(creep_x * creep_x + creep_y * creep_y)
+    limit = friction * normal
+    if total <= 0.0 or limit <= 0.0:
+        return 0.0 if limit <= 0.0 else 1.0
+    beta = total / limit
+    if beta <= 3.0:
+        return limit * (beta - beta * beta / 3.0 + beta * beta * beta / 27.0) / total
+    return limit / total
+
+
+@njit(cache=True)
+def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
+    """Linear interpolation of all table columns at y_rel (uniform grid; linear extrapolation
+    of r and dz beyond the ends, other columns held)."""
+    n = table.shape[0]
+    y0 = table[0, 0]
+    dy = table[1, 0] - y0
+    s = (y_rel - y0) / dy
+    if s < 0.0:
+        i, w = 0, s
+    elif s >= n - 1:
+        i, w = n - 2, s - (n - 2)
+    else:
+        i = int(s)
+        w = s - i
+    for c in range(table.shape[1]):
+        out[c] = table[i, c] * (1.0 - w) + table[i + 1, c] * w
+    if w < 0.0 or w > 1.0:  # hold the non-geometric columns at the end values
+        j = 0 if w < 0.0 else n - 1
+        for c in range(COL_DELTA, table.shape[1]):
+            out[c] = table[j, c]
+
+
+@njit(cache=True)
+def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: float,
+                   ws_y: float, ws_z: float, ws_roll: float, ws_yaw: float,
+                   ws_vy: float, ws_vz: float, ws_vroll: float, ws_vpitch: float, ws_vyaw: float,
+                   rail_z: float, rail_y: float, rail_vz: float, rail_vy: float,
+                   row: np.ndarray, out: np.ndarray) -> None:
+    """Contact forces on one wheel (side +1 left, -1 right) in track axes.
+
+    ``rail_*`` are the rail-head displacement and velocity at the contact (structure plus
+    irregularity). Writes ``out``: [F_x, F_y, F_z, M_spin_z, N, y_rel, penetration] where F is
+    the force of the rail on the wheel (contact + flange) and M_spin_z the spin moment about the
+    contact normal. Kinematics (small angles): penetration
+    dZ = z_rail - (z_w + s a0 roll_w) + dz(y_rel); creepages
+    xi_x = -(r - r0)/r0 - s a0 yaw'/V - r pitch'/V,
+    xi_y = [(y_w' + r roll_w' - V yaw_w - y_rail') cos d + s (z_w' + s a0 roll_w' - z_rail') sin d]/V,
+    xi_sp = yaw_w' cos d / V - s sin d / r0.
+    """
+    g_hertz, g_shear, e_mod, nu, mu, r0, a0, flange_gap, flange_k = (
+        scal[0], scal[1], scal[2], scal[3], scal[4], scal[5], scal[6], scal[7], scal[8])
+    y_rel = ws_y - rail_y
+    _table_row(table, side * y_rel, row)
+    radius, dz, delta = row[1], row[2], row[3]
+    cos_d, sin_d = np.cos(delta), np.sin(delta)
+    penetration = rail_z - (ws_z + side * a0 * ws_roll) + dz
+    normal = _hertz_force(penetration * cos_d, g_hertz)
+    fx = 0.0
+    fy = 0.0
+    mz = 0.0
+    if normal > 0.0:
+        c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * row[6])) ** (1.0 / 3.0)
+        ab = row[4] * row[5] * c * c
+        f11 = g_shear * ab * row[7]
+        f22 = g_shear * ab * row[8]
+        f23 = g_shear * ab ** 1.5 * row[9]
+        f33 = g_shear * ab * ab * row[10]
+        xi_x = -(radius - r0) / r0 - side * a0 * ws_vyaw / speed - radius * ws_vpitch / speed
+        v_lat = ws_vy + radius * ws_vroll - speed * ws_yaw - rail_vy
+        v_ver = ws_vz + side * a0 * ws_vroll - rail_vz
+        xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
+        xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
+        tx = -f11 * xi_x
+        ty = -f22 * xi_y - f23 * xi_sp
+        tm = f23 * xi_y - f33 * xi_sp
+        k = _she_factor(tx, ty, mu, normal)
+        fx = k * tx
+        fy = k * ty
+        mz = k * tm
+    force_y = -side * normal * sin_d + fy * cos_d
+    force_z = normal * cos_d + side * fy * sin_d
+    # flange: stiff lateral spring beyond the clearance (left flange touches when y_rel > gap)
+    flange_pen = side * y_rel - flange_gap
+    if flange_pen > 0.0:
+        force_y -= side * flange_k * flange_pen
+    out[0] = fx
+    out[1] = force_y
+    out[2] = force_z
+    out[3] = mz
+    out[4] = normal
+    out[5] = y_rel
+    out[6] = penetration
+
+
+def wheel_contact(side: float, geom: ContactGeometry, speed: float, ws: dict, rail: dict) -> np.ndarray:
+    """Python wrapper of :func:`_wheel_contact` for tests: ``ws``/``rail`` give the kinematics."""
+    row = np.zeros(N_COLS)
+    out = np.zeros(7)
+    _wheel_contact(side, geom.table, geom.scalars(), speed,
+                   ws.get("y", 0.0), ws.get("z", 0.0), ws.get("roll", 0.0), ws.get("yaw", 0.0),
+                   ws.get("vy", 0.0), ws.get("vz", 0.0), ws.get("vroll", 0.0), ws.get("vpitch", 0.0),
+                   ws.get("vyaw", 0.0), rail.get("z", 0.0), rail.get("y", 0.0), rail.get("vz", 0.0),
+                   rail.get("vy", 0.0), row, out)
+    return out

@@ -1,0 +1,74 @@
+"""Numba kernels shared by the static solver and the coupled time loop (vehicle side).
+
+Layout conventions: see :mod:`ttbpipe.vehicle.model` (DOFs) and :mod:`ttbpipe.vehicle.contact`
+(geometry table, contact kinematics). Rail kinematics per wheel are packed as
+``rail_kin[ws, side, 0:4] = (z, dz/dt, y, dy/dt)`` of the rail head at the contact (structure plus
+irregularity), side 0 = left rail (+y), 1 = right rail. Per-wheel results are
+``wheel[ws, side, 0:7] = (F_x, F_y, F_z, M_spin, N, y_rel, penetration)`` (force of the rail on
+the wheel, track axes).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .contact import N_COLS, _wheel_contact
+
+N_WHEEL_OUT = 7
+
+
+@njit(cache=True)
+def _csr_matvec_sub(indptr, indices, data, x, out):
+    """out -= A x for a CSR matrix A."""
+    for i in range(indptr.shape[0] - 1):
+        s = 0.0
+        for j in range(indptr[i], indptr[i + 1]):
+            s += data[j] * x[indices[j]]
+        out[i] -= s
+
+
+@njit(cache=True)
+def _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp):
+    """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``.
+
+    A contact at (0, s a0, -r) from the wheelset centre with force (F_x, F_y, F_z) and spin moment
+    M about the normal gives: y += F_y, z += F_z, roll += s a0 F_z + r F_y, pitch (spin)
+    += -r F_x, yaw += -s a0 F_x + M cos(delta) (r x F, small angles). The rolling radius r and
+    contact angle come from the geometry table at the wheel's relative lateral position.
+    """
+    a0 = scal[6]
+    n_ws = ws_dofs.shape[0]
+    for w in range(n_ws):
+        iy = ws_dofs[w, 0]
+        iz = ws_dofs[w, 1]
+        ir = ws_dofs[w, 2]
+        ip = ws_dofs[w, 3]
+        iw = ws_dofs[w, 4]
+        for k in range(2):
+            side = 1.0 if k == 0 else -1.0
+            _wheel_contact(side, table, scal, speed,
+                           q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip], v[iw],
+                           rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3],
+                           row, tmp)
+            fx = tmp[0]
+            fy = tmp[1]
+            fz = tmp[2]
+            radius = row[1]
+            cos_d = np.cos(row[3])
+            force[iy] += fy
+            force[iz] += fz
+            force[ir] += side * a0 * fz + radius * fy
+            force[ip] += -radius * fx
+            force[iw] += -side * a0 * fx + tmp[3] * cos_d
+            for c in range(7):
+                wheel[w, k, c] = tmp[c]
+
+
+def contact_forces(q, v, ws_dofs, geom, speed, rail_kin):
+    """Python wrapper: (generalised force vector, wheel table) for the whole train."""
+    force = np.zeros(q.size)
+    wheel = np.zeros((ws_dofs.shape[0], 2, N_WHEEL_OUT))
+    _train_contact(q, v, ws_dofs, geom.table, geom.scalars(), float(speed), rail_kin, force, wheel,
+                   np.zeros(N_COLS), np.zeros(N_WHEEL_OUT))
+    return force, wheel

@@ -1,0 +1,110 @@
+"""Static (gravity-loaded) equilibrium of the train, on a rigid track or coupled to the structure.
+
+Vehicle: Newton iterations on R(q) = f_gravity + f_contact(q) - K q = 0, with the exact nonlinear
+contact law of the time loop (Hertz normal force, creep forces at zero velocities, flange) and a
+finite-difference contact Jacobian (the contact force of a wheelset depends only on that
+wheelset's DOFs, so 5 evaluations give the whole block-diagonal Jacobian). Wheelset spin DOFs
+have no static stiffness and are held at 0. Couplers are excluded (they are made stress-free in
+the static state: the time loop adds the constant preload K_coupler q_static, which is the
+equivalent of adjusting the coupler heads to the static car heights).
+
+Structure: K u = f with the structure's global K (``StructureModel.matrices()``, assembled from
+the arrays its kernels use), fixed DOFs held at 0. The train-structure equilibrium is a fixed-point iteration between
+the two (the rails are ~100x stiffer than the primary suspension, so it converges in a few
+iterations); it stops when the wheel loads change by less than ``tol_load`` N.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .kernels import contact_forces
+from .model import DOF_PER_BODY, PITCH, TrainModel
+
+log = logging.getLogger(__name__)
+
+
+def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.ndarray | None = None,
+                         tol_disp: float = 1e-11, max_iter: int = 60) -> tuple[np.ndarray, np.ndarray]:
+    """Static vehicle DOFs q (m, rad) and the per-wheel contact table on rails at ``rail_kin``.
+
+    ``rail_kin`` (n_ws, 2, 4): rail-head z, dz/dt, y, dy/dt at each wheel (zeros: perfect rigid
+    track). Raises RuntimeError naming the remedy when Newton does not converge.
+    """
+    n = model.n_dof
+    n_ws = model.n_wheelsets
+    if rail_kin is None:
+        rail_kin = np.zeros((n_ws, 2, 4))
+    k_susp = (model.stiffness - model.coupler_stiffness).tocsr()
+    free = np.ones(n, dtype=bool)
+    free[model.wheelset_dofs[:, PITCH]] = False
+    # initial guess: the whole train sunk by the Hertz static penetration on its rails
+    g = geom.hertz_g
+    q = np.zeros(n)
+    for c in range(model.params.n_cars):
+        sl = slice(35 * c, 35 * (c + 1))
+        ws = np.flatnonzero(model.wheelset_car == c)
+        rail_z = rail_kin[ws, :, 0].mean()
+        q[sl][1::DOF_PER_BODY] = rail_z - g * model.static_wheel_load[ws[0]] ** (2.0 / 3.0)
+    zero_v = np.zeros(n)
+    f_g = model.gravity_force
+    eps = 1e-7
+    for it in range(max_iter):
+        f_c, wheel = contact_forces(q, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
+        resid = f_g + f_c - k_susp @ q
+        # block-diagonal contact Jacobian by finite differences, one wheelset DOF kind at a time
+        rows, cols, vals = [], [], []
+        for k in range(5):
+            if k == PITCH:
+                continue
+            dq = np.zeros(n)
+            dq[model.wheelset_dofs[:, k]] = eps
+            f_p, _ = contact_forces(q + dq, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
+            f_m, _ = contact_forces(q - dq, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
+            df = (f_p - f_m) / (2 * eps)
+            for w in range(n_ws):
+                d = model.wheelset_dofs[w]
+                rows.append(d); cols.append(np.full(5, d[k])); vals.append(df[d])
+        jac_c = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                              shape=(n, n)).tocsr()
+        jac = (k_susp - jac_c).tocsr()[free][:, free]
+        step = spla.spsolve(jac.tocsc(), resid[free])
+        if not np.all(np.isfinite(step)):
+            raise RuntimeError("static equilibrium: singular Jacobian (a wheel without contact or "
+                               "an unsupported body); check the suspension parameters and wheel loads")
+        q[free] += step
+        if np.max(np.abs(step)) < tol_disp:
+            f_c, wheel = contact_forces(q, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
+            log.debug("vehicle static equilibrium in %d Newton iterations", it + 1)
+            return q, wheel
+    raise RuntimeError(f"static equilibrium: Newton did not converge in {max_iter} iterations "
+                       f"(last step {np.max(np.abs(step)):.3g} m); check the contact parameters "
+                       "(Hertz G, wheel loads) or raise max_iter")
+
+
+class StructureStatic:
+    """Static solves K u = f of the linear structure (free DOFs; factorised once).
+
+    K comes from the structure owner's ``StructureModel.matrices()``, which assembles the same
+    packed arrays the explicit kernels use, so the static state is the rest state of the time
+    loop (no initial transient).
+    """
+
+    def __init__(self, structure_model):
+        _, k_glob, _ = structure_model.matrices()
+        self.n = structure_model.n_dof
+        self.free = ~np.asarray(structure_model.fixed, dtype=bool)
+        self._lu = spla.splu(k_glob.tocsr()[self.free][:, self.free].tocsc())
+
+    def solve(self, nodal_force: np.ndarray) -> np.ndarray:
+        """Displacements u with K u = f (u = 0 on fixed DOFs)."""
+        u = np.zeros(self.n)
+        u[self.free] = self._lu.solve(np.asarray(nodal_force, dtype=float)[self.free])
+        if not np.all(np.isfinite(u)):
+            raise RuntimeError("structure static solve gave non-finite displacements: the structure "
+                               "has an unsupported mechanism; check its boundary conditions")
+        return u
