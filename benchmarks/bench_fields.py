@@ -49,6 +49,15 @@ def main() -> None:
               f"({len(df)} rows) {t_draw * 1e3:.1f} ms; 1000 samples (arrays) "
               f"{t_1000:.2f} s = {t_1000 / 1000:.2e} s/sample; coefficients per parameter {coeffs}")
 
+    print("== long line, eq. 34 division: 5 km plain track, C2 pads, 50 segments of 100 m ==")
+    long_fields = dict(fields, geometry={"line_length_m": 5000.0, "fastener_spacing_m": 0.63},
+                       groups={"C2": fields["groups"]["C2"]}, segments=50)
+    t_setup, sampler = timed(lambda: FieldSampler(long_fields, seed), repeat=1)
+    t_draw, _ = timed(lambda: [sampler.sample(i) for i in range(100)], repeat=1)
+    n_bases = len({id(seg.basis) for seg in sampler.samplers[0].segments})
+    print(f"{sampler.samplers[0].positions_m.size} fasteners: set-up {t_setup * 1e3:.0f} ms "
+          f"({n_bases} distinct segment bases), 100 samples {t_draw:.2f} s")
+
     print("== Nataf quadrature solve, 8 mixed marginals ==")
     kinds = ["lognormal", "gamma", "weibull", "uniform", "truncated_normal", "lognormal",
              "gamma", "weibull"]

@@ -90,7 +90,8 @@ def test_column_in_other_unit_names_expected_unit(tmp_path):
     frame["vertical_left_m"] /= 1000.0
     path = write_csv(frame, tmp_path)
     expect_error(path, row=None, column="vertical_left_m",
-                 words=["metres", "'vertical_left_mm'", "millimetres", "multiply the values by 1000"])
+                 words=["metres", "'vertical_left_mm'", "millimetres",
+                        "multiply the values by 1000"])
     frame = good_frame().rename(columns={"gauge_mm": "gauge_in"})
     path = write_csv(frame, tmp_path, "2023-01-16.csv")
     expect_error(path, row=None, column="gauge_in", words=["inches", "'gauge_mm'", "25.4"])
@@ -184,7 +185,8 @@ def test_chainage_jump(tmp_path):
     frame.loc[500:, "chainage_m"] += 0.1  # from data row 501 on, 0.4 step off the 0.25 m grid
     path = write_csv(frame, tmp_path)
     expect_error(path, row=501, column="chainage_m",
-                 words=["jump in chainage", "(row 500)", "is 0.35 m, not a multiple of the 0.25 m median step"])
+                 words=["jump in chainage", "(row 500)",
+                        "is 0.35 m, not a multiple of the 0.25 m median step"])
 
 
 def test_dropout_longer_than_limit(tmp_path):
@@ -232,3 +234,11 @@ def test_blank_lines(tmp_path):
     lines.insert(11, "")  # a blank line 12 = data row 11
     path.write_text("\n".join(lines) + "\n")
     expect_error(path, row=11, column="chainage_m", words=["missing chainage value"])
+
+
+def test_error_survives_pickling():
+    """Errors cross process boundaries (Snakemake jobs, dask workers) intact."""
+    import pickle
+    err = pickle.loads(pickle.dumps(InspectionError("f/2023-01-15.csv", 3, "gauge_mm", "bad")))
+    assert (err.file, err.row, err.column) == ("f/2023-01-15.csv", 3, "gauge_mm")
+    assert str(err) == "f/2023-01-15.csv: row 3 (line 4), column gauge_mm: bad"

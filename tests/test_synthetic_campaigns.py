@@ -122,7 +122,8 @@ def test_other_spectrum_and_model_parameters():
     assert campaign.artefacts == {"dropouts": 0, "spikes": 0}
     assert not campaign.table.isna().any().any()
     # without noise the table is the truth rounded to the 0.01 mm resolution
-    np.testing.assert_allclose(campaign.table.to_numpy(), campaign.truth.to_numpy(), atol=0.005 + 1e-9)
+    np.testing.assert_allclose(campaign.table.to_numpy(), campaign.truth.to_numpy(),
+                               atol=0.005 + 1e-9)
     clean_campaign(campaign.table, "2023-01-15.parquet")
 
 
@@ -134,3 +135,44 @@ def test_cli_synth_inspections(tmp_path, capsys):
                                                      "2023-03-31.parquet"]
     assert "wrote 3 campaigns" in capsys.readouterr().out
     assert main(["check-inspection", str(out / "2023-02-28.parquet")]) == 0
+
+
+def test_workflow_scripts(tmp_path):
+    """workflow/scripts/{synth,check}_inspection(s).py with a stand-in for Snakemake's object."""
+    import json
+    import runpy
+    import types
+    from pathlib import Path
+
+    class Files(list):
+        def __init__(self, items, **named):
+            super().__init__(items)
+            self.__dict__.update(named)
+
+    scripts = Path(__file__).resolve().parents[1] / "workflow" / "scripts"
+    dates = ["2023-01-15", "2023-02-15"]
+    synthetic = {"enabled": True, "directory": str(tmp_path / "syn"), "spectrum": "tbt3352",
+                 "length_km": 0.5, "campaigns": 2, "start_date": "2023-01-15",
+                 "interval_months": 1, "seed": 1}
+    cleaning = {"max_gap_m": 2.0, "spike_threshold_mm": 15.0, "max_spike_run": 2,
+                "plausible_limit_mm": 60.0, "detrend": "linear"}
+    config = {"study": {"seed": 1}, "inspections": {"directory": str(tmp_path),
+                                                    "synthetic": synthetic, "cleaning": cleaning}}
+    outputs = [str(tmp_path / "syn" / f"{d}.parquet") for d in dates]
+    fake = types.SimpleNamespace(
+        config=config, params=types.SimpleNamespace(synthetic=synthetic, dates=dates, version="t"),
+        output=Files(outputs), log=[str(tmp_path / "synth.log")])
+    runpy.run_path(str(scripts / "synth_inspections.py"), init_globals={"snakemake": fake})
+    assert all(Path(p).is_file() for p in outputs)
+    assert read_provenance(outputs[1])["config"] == config
+    clean_path, repairs_path = tmp_path / "clean.parquet", tmp_path / "clean.repairs.json"
+    fake = types.SimpleNamespace(
+        config=config, params=types.SimpleNamespace(cleaning=cleaning, version="t"),
+        input=Files([outputs[1]]),
+        output=Files([], clean=str(clean_path), repairs=str(repairs_path)),
+        log=[str(tmp_path / "check.log")])
+    runpy.run_path(str(scripts / "check_inspection.py"), init_globals={"snakemake": fake})
+    provenance = read_provenance(clean_path)
+    assert provenance["kind"] == "inspection_clean" and provenance["config"] == config
+    assert json.loads(repairs_path.read_text())["source"] == outputs[1]
+    assert "repaired samples" in (tmp_path / "check.log").read_text()

@@ -68,6 +68,9 @@ class InspectionError(ValueError):
         super().__init__(
             f"{self.file or '<no file>'}: row {row_text}, column {column or 'n/a'}: {reason}")
 
+    def __reduce__(self):  # picklable across processes (Snakemake, dask)
+        return (type(self), (self.file, self.row, self.column, self.reason))
+
 
 def campaign_date(path: str | Path) -> _dt.date:
     """The campaign date encoded in a file name ``YYYY-MM-DD.csv|parquet``."""

@@ -12,13 +12,13 @@
    below 1 cm or above 10 m is in the wrong unit.
 3. **Chainage.** No missing value, strictly increasing (a duplicate or a step back is an error
    naming the row).
-4. **Sampling.** The grid is the median step ``h`` (rounded to 1 µm) through the median offset of
-   the samples. Samples within ``sampling_tolerance * h`` of the grid are on it; if any sample is
-   further off (jitter, up to ``max_jitter * h``) every channel is re-gridded by linear
-   interpolation (logged, counted as ``regridded``). A sample further off than ``max_jitter * h``
-   or two samples in one grid cell is an error (a jump). Missing rows (dropouts) of up to
-   ``max_gap_m`` in total length are re-inserted (counted as ``dropout_interpolated``); longer
-   dropouts are errors.
+4. **Sampling.** Every step must lie within ``max_jitter`` (25 %) of a whole multiple of the
+   median step, else it is a jump (an error naming the row). The grid step is fitted to the file
+   (least squares on the grid indices) and the grid origin is the median offset of the samples.
+   Samples within ``sampling_tolerance * h`` (1 %) of the grid are on it; if any sample is
+   further off (jitter), every channel is re-gridded by linear interpolation (logged, counted as
+   ``regridded``). Missing rows (dropouts) of up to ``max_gap_m`` in total length are
+   re-inserted (counted as ``dropout_interpolated``); longer dropouts are errors.
 5. **Missing values.** Runs of NaN (together with re-inserted rows) of up to ``max_gap_m``
    (``n_samples * h``) are interpolated linearly (at the ends of the file: the nearest valid
    value is held); longer runs are errors naming the file, the first row and the column.

@@ -33,6 +33,9 @@ CARRIER_PARAMETERS: dict[str, tuple[str, ...]] = {
 }
 PARAMETER_CARRIER = {p: kind for kind, ps in CARRIER_PARAMETERS.items() for p in ps}
 
+#: 3-point Gauss-Legendre rule on [0, 1]: (xi, weight)
+GAUSS3 = ((0.5 - np.sqrt(0.15), 5 / 18), (0.5, 8 / 18), (0.5 + np.sqrt(0.15), 5 / 18))
+
 
 class _Links:
     """Accumulates spring-damper links (CSR rows of (dof, coef), stiffness, damping)."""
@@ -360,13 +363,14 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         m_s = rho_s * b_s * t_s
         J_s = rho_s * (b_s * t_s ** 3 + t_s * b_s ** 3) / 12
         rot_s = float(slab_c["rotary_inertia_scaling"]) / 78.0
+        rot_sl = float(slab_c["lateral_rotary_inertia_scaling"]) / 78.0
         for (zone, xs), d0 in zip(layout.slab_units, slab_node_dof0):
             Ls = np.diff(xs)
             for a_dofs in (d0[:-1], d0[1:]):
                 np.add.at(mass, a_dofs, 0.5 * m_s * Ls)
                 np.add.at(mass, a_dofs + 2, 0.5 * m_s * Ls)
                 np.add.at(mass, a_dofs + 1, rot_s * m_s * Ls ** 3)
-                np.add.at(mass, a_dofs + 3, rot_s * m_s * Ls ** 3)
+                np.add.at(mass, a_dofs + 3, rot_sl * m_s * Ls ** 3)
                 np.add.at(mass, a_dofs + 4, 0.5 * J_s * Ls)
             beam_a.append(d0[:-1]); beam_b.append(d0[1:]); beam_L.append(Ls)
             beam_EIv.append(np.full(Ls.size, E_s * b_s * t_s ** 3 / 12))
@@ -461,12 +465,11 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                     links.add([bd, bd + 2], [1.0, -1.0], bal["shear_k_N_m"], bal["shear_c_Ns_m"],
                               "ballast_shear")
             links.add([sd + 1], [1.0], bal["ballast_ky_N_m"], bal["ballast_cy_Ns_m"], "ballast_y")
-        # CA mortar (bridge) or foundation (slab on subgrade), lumped at element ends
+        # CA mortar (bridge) or foundation (slab on subgrade), per slab element
         b2 = float(slab_c["width_m"]) ** 2 / 12.0
         h_deck = float(g_c["deck_height_m"])
         sub = cfg["slab_on_subgrade"]
         for j, (xa, xb, da, db, zone) in enumerate(slab_elems):
-            w = 0.5 * (xb - xa)
             if zone == "bridge":
                 kz, cz = props["ca_kz"][j], props["ca_cz"][j]
                 ky, cy = props["ca_ky"][j], props["ca_cy"][j]
@@ -476,19 +479,26 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                 cz = float(sub["foundation_cz_Ns_m2"]) * scale("ca_cz", "cz_Ns_m2")
                 ky = float(sub["foundation_ky_N_m2"]) * scale("ca_ky", "ky_N_m2")
                 cy = float(sub["foundation_cy_Ns_m2"]) * scale("ca_cy", "cy_Ns_m2")
-            for x, d in ((xa, da), (xb, db)):
+            # consistent distributed foundation: 3-point Gauss quadrature of k N^T N over the
+            # element (slab Hermite/linear shape functions, girder basis at each point)
+            Ls = xb - xa
+            for xi_g, w_g in GAUSS3:
+                x = xa + xi_g * Ls
+                w = w_g * Ls
+                N = hermite_shape(xi_g, Ls)
+                zd, zc = [da, da + 1, db, db + 1], list(N)
+                zd += [da + 4, db + 4]; zc += [0.0, 0.0]
+                yd = [da + 2, da + 3, db + 2, db + 3, da + 4, db + 4]
+                yc = [*N, t_half * (1 - xi_g), t_half * xi_g]
+                rdofs, rc = [da + 4, db + 4], [1 - xi_g, xi_g]
                 g = span_rows(x) if zone == "bridge" else None
-                if g is None:
-                    zd, zc = [d], [1.0]
-                    yd, yc = [d + 2, d + 4], [1.0, t_half]
-                    rdofs, rc = [d + 4], [1.0]
-                else:
+                if g is not None:
                     s, rz, ry, rr = g
                     o = span_dof0[s]
-                    idx = np.arange(o, o + spans[s].n)
-                    zd, zc = [d, *idx], [1.0, *(-rz)]
-                    yd, yc = [d + 2, d + 4, *idx], [1.0, t_half, *(-(ry - h_deck * rr))]
-                    rdofs, rc = [d + 4, *idx], [1.0, *(-rr)]
+                    idx = list(range(o, o + spans[s].n))
+                    zd, zc = zd + idx, zc + list(-rz)
+                    yd, yc = yd + idx, yc + list(-(ry - h_deck * rr))
+                    rdofs, rc = rdofs + idx, rc + list(-rr)
                 links.add(zd, zc, kz * w, cz * w, "ca_z")
                 links.add(yd, yc, ky * w, cy * w, "ca_y")
                 links.add(rdofs, rc, kz * w * b2, cz * w * b2, "ca_roll")

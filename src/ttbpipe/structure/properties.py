@@ -55,7 +55,8 @@ SLAB = {
     "E_Pa": 3.6e10,
     "poisson": 0.2,
     "density_kg_m3": 2500.0,         # -> 1275 kg/m [C]
-    "rotary_inertia_scaling": 1.0,
+    "rotary_inertia_scaling": 1.0,   # x HRZ m L^3/78 on the vertical-slope DOFs
+    "lateral_rotary_inertia_scaling": 1.0,  # x HRZ on the lateral-slope DOFs (see docs)
 }
 
 #: CA mortar between slab and girder (or base), per metre of track. [V: Zeng 2014: 2 x 1.5e9 N/m2,

@@ -96,7 +96,7 @@ class SpectralEvolution:
     """
 
     def __init__(self, n_partitions: int = 5, partition_scale: str = "log",
-                 min_partition_count: int = 10, n_probability: int = 201):
+                 min_partition_count: int = 10, n_probability: int = 101):
         if n_partitions < 1:
             raise ValueError(f"n_partitions must be >= 1, got {n_partitions}")
         if partition_scale not in PARTITION_SCALES:
@@ -163,22 +163,27 @@ class SpectralEvolution:
         counts = np.zeros((n_f, n_c, z), dtype=int)
         pooled = np.zeros((n_f, n_c, z), dtype=int)
         labels = self._partition_of(start, edges)                         # (E, F, C)
-        for k in range(n_f):
-            for c in range(n_c):
-                lab, inc = labels[:, k, c], increments[:, k, c]
-                members = [inc[lab == g] for g in range(z)]
-                counts[k, c] = [m.size for m in members]
-                for g in range(z):
-                    lo = hi = g
-                    # pool the nearest partitions until the conditional sample is large enough
-                    while sum(counts[k, c, lo:hi + 1]) < self.min_partition_count and (lo > 0 or hi < z - 1):
-                        if lo > 0:
-                            lo -= 1
-                        if hi < z - 1 and sum(counts[k, c, lo:hi + 1]) < self.min_partition_count:
-                            hi += 1
-                    sample = np.concatenate(members[lo:hi + 1])
-                    pooled[k, c, g] = sample.size
-                    quantiles[k, c, g] = np.quantile(sample, grid)
+        counts = np.stack([(labels == g).sum(axis=0) for g in range(z)], axis=-1)
+        cumulative = np.concatenate([np.zeros((n_f, n_c, 1), int), np.cumsum(counts, axis=-1)], axis=-1)
+        for g in range(z):
+            lo = np.full((n_f, n_c), g)
+            hi = np.full((n_f, n_c), g)
+            # pool the nearest partitions until the conditional sample is large enough
+            for _ in range(z):
+                total = np.take_along_axis(cumulative, hi[..., None] + 1, -1)[..., 0] - \
+                    np.take_along_axis(cumulative, lo[..., None], -1)[..., 0]
+                short = total < self.min_partition_count
+                if not short.any():
+                    break
+                lo = np.where(short & (lo > 0), lo - 1, lo)
+                total = np.take_along_axis(cumulative, hi[..., None] + 1, -1)[..., 0] - \
+                    np.take_along_axis(cumulative, lo[..., None], -1)[..., 0]
+                short = total < self.min_partition_count
+                hi = np.where(short & (hi < z - 1), hi + 1, hi)
+            member = (labels >= lo) & (labels <= hi)
+            pooled[..., g] = member.sum(axis=0)
+            quantiles[:, :, g, :] = np.moveaxis(
+                np.nanquantile(np.where(member, increments, np.nan), grid, axis=0), 0, -1)
         n_pooled = int((pooled > counts).sum())
         if n_pooled:
             log.info("%d of %d partitions had < %d increments and pooled their neighbours",
@@ -208,10 +213,12 @@ class SpectralEvolution:
         position = p * (fit.probability_grid.size - 1)
         lower = np.minimum(np.floor(position).astype(int), fit.probability_grid.size - 2)
         frac = position - lower
-        f_idx = np.arange(state.shape[-2]).reshape(-1, 1)
-        c_idx = np.arange(state.shape[-1]).reshape(1, -1)
-        q_lo = fit.quantiles[f_idx, c_idx, g, lower]
-        q_hi = fit.quantiles[f_idx, c_idx, g, lower + 1]
+        n_f, n_c, z, n_p = fit.quantiles.shape
+        cell = (np.arange(n_f).reshape(-1, 1) * n_c + np.arange(n_c).reshape(1, -1)) * z
+        flat = ((cell + g) * n_p + lower).ravel()
+        table = fit.quantiles.reshape(-1)
+        q_lo = table.take(flat).reshape(state.shape)
+        q_hi = table.take(flat + 1).reshape(state.shape)
         return q_lo + frac * (q_hi - q_lo)
 
     def step(self, state: np.ndarray, p: np.ndarray | float) -> tuple[np.ndarray, int]:
@@ -231,7 +238,7 @@ class SpectralEvolution:
             state, h = self.step(state, p)
             hits += h
         if hits:
-            log.info("forecast p = %.3g: %d ordinate-steps floored at the smallest observed PSD", p, hits)
+            log.debug("forecast p = %.3g: %d ordinate-steps floored at the smallest observed PSD", p, hits)
         return state
 
     def simulate(self, state: np.ndarray, n_steps: int, n_paths: int,
@@ -254,17 +261,21 @@ class SpectralEvolution:
                      "PSD", hits, int(n_steps) * state.size)
 
     def envelope(self, state: np.ndarray, n_steps: int, levels: Sequence[float], n_paths: int,
-                 rng: np.random.Generator, delta_n_per_m: float | None = None
-                 ) -> tuple[np.ndarray, np.ndarray | None]:
-        """Percentiles (``levels`` in (0, 1)) of the simulated paths after each step.
+                 rng: np.random.Generator, delta_n_per_m: float | None = None,
+                 at_steps: Sequence[int] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+        """Percentiles (``levels`` in (0, 1)) of the simulated paths after steps ``at_steps``
+        (1-based; default every step 1..n_steps).
 
-        Returns (psd (n_steps, len(levels), *state.shape), tqi) where ``tqi`` (n_steps,
-        len(levels), *state.shape[:-2], C) are the percentiles of the paths' equivalent TQI
-        sqrt(Σ S Δn) (mm) when ``delta_n_per_m`` is given, else None.
+        Returns (psd (len(at_steps), len(levels), *state.shape), tqi) where ``tqi``
+        (len(at_steps), len(levels), *state.shape[:-2], C) are the percentiles of the paths'
+        equivalent TQI sqrt(Σ S Δn) (mm) when ``delta_n_per_m`` is given, else None.
         """
         levels = np.asarray(levels, float)
+        wanted = set(range(1, int(n_steps) + 1) if at_steps is None else (int(s) for s in at_steps))
         psd_out, tqi_out = [], []
-        for paths in self.simulate(state, n_steps, n_paths, rng):
+        for step, paths in enumerate(self.simulate(state, n_steps, n_paths, rng), start=1):
+            if step not in wanted:
+                continue
             psd_out.append(np.quantile(paths, levels, axis=0))
             if delta_n_per_m is not None:
                 tqi = np.sqrt(paths.sum(axis=-2) * delta_n_per_m)
@@ -304,7 +315,8 @@ class SpectralEvolution:
                     metadata["min_partition_count"])
         model.interval_months = float(metadata["interval_months"])
         model.n_increments = int(metadata["n_increments"])
-        channels = tuple(c for c in SPECTRAL_CHANNELS if c in set(table["channel"]))
+        present = set(table["channel"].astype(str).unique())
+        channels = tuple(c for c in SPECTRAL_CHANNELS if c in present)
         order = {c: i for i, c in enumerate(channels)}
         t = table.assign(_c=table["channel"].map(order)).sort_values(
             ["spatial_frequency_per_m", "_c", "partition", "probability"])
@@ -327,24 +339,33 @@ class SpectralEvolution:
 
 def forecast_coverage(model: SpectralEvolution, base: PSDPopulation,
                       observed: Sequence[tuple[float, PSDPopulation]], levels: tuple[float, float],
-                      n_paths: int, rng: np.random.Generator) -> pd.DataFrame:
+                      n_paths: int, rng: np.random.Generator
+                      ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """Share of observed section ordinates inside the forecast band, per channel and horizon.
 
     ``observed`` = [(months after ``base``, population)]; sections matched on chainage. For each
     horizon two bands are scored: the Monte Carlo predictive band (percentiles ``levels`` of the
     paths, nominal coverage levels[1] − levels[0]) and the fixed-p envelope of eq. 56
     (p = levels[0] and levels[1] held for every step).
+    Returns (coverage table, PSD band, TQI band), the bands from :meth:`SpectralEvolution.envelope`
+    at every step with the levels (levels[0], 0.5, levels[1]).
     """
     lo_level, hi_level = levels
     max_steps = max(model.steps_for(h) for h, _ in observed)
-    band, _ = model.envelope(base.psd_mm2_m, max_steps, [lo_level, hi_level], n_paths, rng)
+    band, tqi_band = model.envelope(base.psd_mm2_m, max_steps, [lo_level, 0.5, hi_level], n_paths,
+                                    rng, base.delta_n_per_m)
+    fixed = {p: [] for p in (lo_level, hi_level)}
+    for p in fixed:
+        state = base.psd_mm2_m
+        for _ in range(max_steps):
+            state = model.forecast_fixed(state, 1, p)
+            fixed[p].append(state)
     rows = []
     for horizon, pop in observed:
         s = model.steps_for(horizon) - 1
         (b_idx, o_idx) = _match(base, pop)
-        lower, upper = band[s, 0][b_idx], band[s, 1][b_idx]
-        fixed_lo = model.forecast_fixed(base.psd_mm2_m[b_idx], s + 1, lo_level)
-        fixed_hi = model.forecast_fixed(base.psd_mm2_m[b_idx], s + 1, hi_level)
+        lower, upper = band[s, 0][b_idx], band[s, 2][b_idx]
+        fixed_lo, fixed_hi = fixed[lo_level][s][b_idx], fixed[hi_level][s][b_idx]
         obs = pop.psd_mm2_m[o_idx]
         for c, channel in enumerate(model.channels):
             o = obs[..., c]
@@ -356,7 +377,7 @@ def forecast_coverage(model: SpectralEvolution, base: PSDPopulation,
                          "coverage_fixed_p": float(np.mean((o >= fixed_lo[..., c]) & (o <= fixed_hi[..., c]))),
                          "below_mc": float(np.mean(o < lower[..., c])),
                          "above_mc": float(np.mean(o > upper[..., c]))})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows), band, tqi_band
 
 
 def _match(a: PSDPopulation, b: PSDPopulation) -> tuple[list[int], list[int]]:

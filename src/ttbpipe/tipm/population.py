@@ -116,8 +116,9 @@ class PSDPopulation:
             n = table["spatial_frequency_per_m"].to_numpy()
             keep = (n >= (1 / lam_max) * (1 - 1e-9)) & (n <= (1 / lam_min) * (1 + 1e-9))
             table = table.loc[keep]
-        channels = tuple(c for c in SPECTRAL_CHANNELS if c in set(table["channel"]))
-        unknown = set(table["channel"]) - set(SPECTRAL_CHANNELS)
+        present = set(table["channel"].astype(str).unique())
+        channels = tuple(c for c in SPECTRAL_CHANNELS if c in present)
+        unknown = present - set(SPECTRAL_CHANNELS)
         if unknown:
             raise ValueError(f"{source}: unknown channels {sorted(unknown)}")
         if table.duplicated(["section", "channel", "spatial_frequency_per_m"]).any():

@@ -126,7 +126,8 @@ class TIPMSelection:
                         method: str = "copula") -> "TIPMSelection":
         """Inverse of :meth:`to_long_table` (``samples`` is the weights table)."""
         from ..channels import SPECTRAL_CHANNELS
-        channels = tuple(c for c in SPECTRAL_CHANNELS if c in set(table["channel"]))
+        present = set(table["channel"].astype(str).unique())
+        channels = tuple(c for c in SPECTRAL_CHANNELS if c in present)
         wide = table.pivot(index=["sample_index", "spatial_frequency_per_m"], columns="channel",
                            values="psd_mm2_m").reindex(columns=list(channels)).sort_index()
         idx = wide.index.get_level_values(0).unique()

@@ -161,14 +161,17 @@ def forecast_stage(model: SpectralEvolution, selection_table: pd.DataFrame, weig
     steps = [model.steps_for(h) for h in horizons]
     rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
                                                         STREAM_MONTE_CARLO]))
-    mc_band, _ = model.envelope(selection.psd_mm2_m, max(steps), levels, int(f["monte_carlo_paths"]), rng)
+    unique_steps = sorted(set(steps))
+    mc_band, _ = model.envelope(selection.psd_mm2_m, max(steps), levels, int(f["monte_carlo_paths"]),
+                                rng, at_steps=unique_steps)
     rows, states, psd_sets = [], [], []
     base = _dt.date.fromisoformat(base_date)
     for h, n_steps in zip(horizons, steps):
         target = _add_months(base, int(round(h))).isoformat()
         for li, p in enumerate(levels):
             fixed = model.forecast_fixed(selection.psd_mm2_m, n_steps, p)
-            for envelope, values in (("fixed_p", fixed), ("monte_carlo", mc_band[n_steps - 1, li])):
+            mc = mc_band[unique_steps.index(n_steps), li]
+            for envelope, values in (("fixed_p", fixed), ("monte_carlo", mc)):
                 t = TIPMSelection(values, selection.weights, selection.frequency_per_m,
                                   selection.channels, selection.samples).to_long_table()
                 t.insert(0, "level", p)
@@ -214,13 +217,10 @@ def validation_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any],
     levels = tuple(float(x) for x in v["band"])
     rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
                                                         STREAM_MONTE_CARLO, 1]))
-    coverage = forecast_coverage(model, base, observed, levels, int(v["monte_carlo_paths"]), rng)
-    # TQI (band RMS) paths for the figure: observed per section, forecast band per section
-    n_steps = max(model.steps_for(h) for h, _ in observed)
-    rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
-                                                        STREAM_MONTE_CARLO, 2]))
-    _, tqi_band = model.envelope(base.psd_mm2_m, n_steps, (levels[0], 0.5, levels[1]),
-                                 int(v["monte_carlo_paths"]), rng, base.delta_n_per_m)
+    coverage, _, tqi_band = forecast_coverage(model, base, observed, levels,
+                                              int(v["monte_carlo_paths"]), rng)
+    n_steps = tqi_band.shape[0]
+    # TQI (band RMS) for the figure: observed per section, forecast band per section
     rows = []
     for p in pops:
         d = str(p.sections["campaign_date"].iloc[0])

@@ -1,0 +1,92 @@
+"""Static equilibrium and perfect-track runs of the train (ttbpipe.vehicle.static + coupled loop)."""
+
+import numpy as np
+import pytest
+
+from ttbpipe.simulation.coupled import prepare, run_coupled
+from ttbpipe.vehicle.contact import build_geometry
+from ttbpipe.vehicle.model import PITCH, ROLL, YAW, Y, build_train_model
+from ttbpipe.vehicle.parameters import GRAVITY, TrainParameters
+from ttbpipe.vehicle.static import solve_vehicle_static
+
+
+def _weight_distribution(train):
+    """Per-wheel static load from the weight distribution of a symmetric car:
+    g (M_c/8 + M_t/4 + M_w/2)."""
+    return np.array([GRAVITY * (c.car_mass / 8 + c.bogie_mass / 4 + c.wheelset_mass / 2)
+                     for c in train.cars for _ in range(4)])
+
+
+def test_vehicle_static_newton_matches_weight_distribution():
+    """Newton static solve on a perfect rigid track: every wheel carries its share of the car's
+    weight (closed form above) to 1e-9, and the lateral DOFs stay exactly at rest."""
+    train = TrainParameters()
+    model = build_train_model(train)
+    q, wheel = solve_vehicle_static(model, build_geometry(train.contact), 80.0)
+    p_ref = _weight_distribution(train)
+    assert np.allclose(wheel[:, 0, 2], p_ref, rtol=1e-9)
+    assert np.allclose(wheel[:, 1, 2], p_ref, rtol=1e-9)
+    lateral = np.concatenate([q[Y::5], q[ROLL::5], q[YAW::5]])
+    assert np.max(np.abs(lateral)) < 1e-12
+    # total vertical contact force = total weight (equilibrium, 1e-9)
+    total = sum(c.total_mass for c in train.cars) * GRAVITY
+    assert wheel[:, :, 2].sum() == pytest.approx(total, rel=1e-9)
+
+
+def test_rigid_track_low_speed_keeps_static_loads():
+    """Perfect rigid track at 36 km/h for 2 s: wheel loads equal the weight distribution within
+    0.5 % at every output step (issue 4 requirement), the t = 0 loads equal the static solution
+    (no initial transient, 1e-9), and there is no lateral response (|y| < 1e-12 m, H < 1e-6 N)."""
+    case = {"simulation": {"track": "rigid", "speed_kmh": 36.0, "rigid_length_m": 20.0,
+                           "time_step_s": 1e-4, "output_interval_s": 1e-3},
+            "irregularity": {"source": "none"}}
+    table, summary = run_coupled(case)
+    train = TrainParameters()
+    p_ref = _weight_distribution(train)
+    loads = table[[c for c in table.columns if c.endswith("_P_N")]].to_numpy()
+    ref = np.repeat(p_ref, 2)
+    assert np.max(np.abs(loads / ref - 1)) < 5e-3
+    assert np.allclose(loads[0], ref, rtol=1e-9)
+    ys = table[[c for c in table.columns if c.endswith("_y_mm")]].to_numpy()
+    assert np.max(np.abs(ys)) < 1e-9
+    hs = table[[c for c in table.columns if c.endswith("_H_N")]].to_numpy()
+    assert np.max(np.abs(hs)) < 1e-6
+    lat = table[[c for c in table.columns if c.endswith("_ay_m_s2")]].to_numpy()
+    assert np.max(np.abs(lat)) < 1e-9
+    assert summary["max_wheel_unloading"] < 5e-3
+
+
+def test_vertical_excitation_only_gives_no_lateral_response():
+    """Straight track with a vertical profile only (no alignment, cross-level or gauge) at 300
+    km/h: the train's left-right symmetry means no lateral motion at all (|y| < 1e-9 mm,
+    |a_y| < 1e-9 m/s^2), while the vertical response is non-trivial (P varies by > 1 %)."""
+    case = {"simulation": {"track": "rigid", "speed_kmh": 300.0, "rigid_length_m": 120.0,
+                           "time_step_s": 1e-4},
+            "irregularity": {"source": "synthetic", "seed": 7, "channels": ["vertical"]}}
+    table, summary = run_coupled(case)
+    ys = table[[c for c in table.columns if c.endswith("_y_mm")]].to_numpy()
+    lat = table[[c for c in table.columns if c.endswith("_ay_m_s2")]].to_numpy()
+    assert np.max(np.abs(ys)) < 1e-9 and np.max(np.abs(lat)) < 1e-9
+    assert summary["max_wheelset_lateral_force_N"] < 1e-6
+    assert summary["max_wheel_unloading"] > 0.01
+
+
+def test_structure_static_state_and_low_speed_run():
+    """Train on the flexible track-bridge (one 32 m span, rigid-ground approaches): the
+    train-structure static fixed point gives wheel loads within 0.5 % of the weight distribution
+    (the bridge's quasi-static deflection redistributes little load), and a low-speed run starts
+    without transient (t = 0 loads equal the static loads, 1e-6) and keeps them within 0.5 %."""
+    case = {"train": {"composition": ["motor", "trailer"]},
+            "structure": {"layout": {"approach_length_m": 60.0, "spans_m": [32.0],
+                                     "approach_track": "rigid"}},
+            "simulation": {"track": "structure", "speed_kmh": 36.0, "time_step_s": 1e-4,
+                           "end_x_m": 110.0},
+            "irregularity": {"source": "none"}}
+    setup = prepare(case)
+    p_ref = _weight_distribution(setup.train)
+    assert np.allclose(setup.static_wheel[:, 0, 2], p_ref, rtol=5e-3)
+    assert setup.static_iterations <= 10
+    table, _ = run_coupled(case)
+    loads = table[[c for c in table.columns if c.endswith("_P_N")]].to_numpy()
+    assert np.allclose(loads[0], setup.static_wheel[:, :, 2].ravel(), rtol=1e-6)
+    assert np.max(np.abs(loads / np.repeat(p_ref, 2) - 1)) < 5e-3
