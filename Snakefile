@@ -15,6 +15,7 @@ configfile: "config/config.yaml"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/inspections.smk"
+include: "workflow/rules/tipm.smk"
 include: "workflow/rules/fields.smk"
 
 

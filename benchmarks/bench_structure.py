@@ -56,6 +56,11 @@ def main() -> None:
     print(f"steps per second:              {best['n_steps'] / best['wall_s']:.0f}")
     print(f"us per step:                   {1e6 * best['wall_s'] / best['n_steps']:.1f}")
     print(f"wall s per simulated s:        {best['wall_s_per_simulated_s']:.3f}")
+    print(f"CPU s per simulated s:         {best['cpu_s_per_simulated_s']:.3f}  (process time; "
+          f"differs from wall when the cores are shared, load average {os.getloadavg()[0]:.1f})")
+    at = stab   # model.stable_time_step() is already 0.9 x the limit
+    print(f"at dt = {at:.3e} s (0.9 x limit): wall s per simulated s ~ "
+          f"{best['wall_s_per_simulated_s'] * args.dt / at:.3f}")
 
 
 if __name__ == "__main__":

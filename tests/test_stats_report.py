@@ -76,7 +76,7 @@ def test_figures_have_units_and_data(extremes, tmp_path):
     fig = P.plot_extreme_pdfs(extremes, "max_deck_vertical_acc_m_s2", threshold=5.0)
     ax = fig.axes[0]
     assert ax.get_xlabel() == "max. deck vertical acceleration (m/s²)"
-    assert ax.get_ylabel() == "probability density (1/m/s²)"
+    assert ax.get_ylabel() == "probability density (1/(m/s²))"
     (x, y), = [line.get_data() for line in ax.get_lines() if "full" in line.get_label()]
     assert np.trapezoid(y, x) == pytest.approx(1.0, abs=0.02)
     assert any("single value" in line.get_label() for line in ax.get_lines())
@@ -95,5 +95,7 @@ def test_figures_have_units_and_data(extremes, tmp_path):
                        for i, d in enumerate(["2024-01-15", "2024-07-15", "2025-01-15"])])
     env = A.forecast_envelope(dated, "max_wheel_lateral_force_N")
     fig = P.plot_forecast_envelope(env)
-    assert fig.axes[0].get_ylabel() == "max. wheel-rail lateral force (N)"
+    assert fig.axes[0].get_ylabel() == "max. wheel-rail lateral force (kN)"  # displayed in kN
+    (x, y), = [line.get_data() for line in fig.axes[0].get_lines() if line.get_label() == "weighted mean"]
+    np.testing.assert_allclose(y, env["mean"] / 1e3, rtol=1e-12)
     assert io.save_figure(fig, tmp_path / "env.pdf").exists()

@@ -88,4 +88,5 @@ def all_targets() -> list[str]:
     targets = ["results/figures/psd_vs_standard.png"]
     targets += expand("results/psd/{date}.parquet", date=CAMPAIGNS)
     targets.append("results/fields/samples.parquet")
+    targets += tipm_targets()  # workflow/rules/tipm.smk
     return targets

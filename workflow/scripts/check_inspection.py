@@ -6,15 +6,18 @@ import logging
 from ttbpipe.inspection import InspectionError, check_campaign
 from ttbpipe.io import write_table, write_text
 from ttbpipe.logs import setup_logging
+from ttbpipe.workflow import snakemake_context
 
-setup_logging(snakemake.log[0])  # noqa: F821 (snakemake object injected by Snakemake)
-source = snakemake.input[0]  # noqa: F821
+snakemake = snakemake_context(globals(), "check_inspection", date="2023-01-15")
+setup_logging(snakemake.log[0])
+log = logging.getLogger("check_inspection")
+source = snakemake.input[0]
 try:
-    clean, report = check_campaign(source, **snakemake.params.cleaning)  # noqa: F821
+    clean, report = check_campaign(source, **snakemake.params.cleaning)
 except InspectionError as exc:
-    logging.getLogger("check_inspection").error("%s", exc)
+    log.error("%s", exc)
     raise
-logging.getLogger("check_inspection").info("summary:\n%s", report.summary())
-write_table(clean, snakemake.output.clean, config=snakemake.config,  # noqa: F821
+log.info("summary:\n%s", report.summary())
+write_table(clean, snakemake.output.clean, config=snakemake.config,
             kind="inspection_clean", source=str(source), cleaning=report.to_dict())
-write_text(json.dumps(report.to_dict(), indent=2) + "\n", snakemake.output.repairs)  # noqa: F821
+write_text(json.dumps(report.to_dict(), indent=2) + "\n", snakemake.output.repairs)

@@ -11,11 +11,14 @@ Case configuration (all sections optional; SI units unless the key says otherwis
 
     train:        see ttbpipe.vehicle.parameters.train_from_config (+ speed_kmh)
     structure:    the structure owner's section (ttbpipe.structure.build_structure)
+    properties:   the structure owner's random-property factors (ttbpipe.simulation.run)
     simulation:
       track: structure | rigid          # default: structure
       speed_kmh: 300                    # or train.speed_kmh
-      time_step_s: 1.0e-4
-      output_interval_s: 1.0e-3
+      time_step_s: 1.0e-4               # or auto: min(contact limit, structure limit)
+      check_time_step: true             # the structure's own check (the contact check always runs)
+      output_interval_s: 1.0e-3         # or output_every: n steps
+      duration_s: null                  # alternative to end_x_m
       start_x_m: null                   # leading wheelset at t=0 (default: rear wheelset 5 m
                                         #  inside the rails)
       end_x_m: null                     # leading wheelset at the end (default: 5 m before the
@@ -324,35 +327,48 @@ def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: flo
 
 
 def contact_time_step_limit(model: TrainModel, geom: ContactGeometry, speed: float,
-                            rail_node_mass: float | None) -> dict:
-    """Largest stable Zhai step from the wheel-rail contact (safety 0.9, omega dt <= 2).
+                            rail_inv_mass_z: float = 0.0, rail_inv_mass_y: float = 0.0) -> dict:
+    """Largest stable Zhai step from the wheel-rail contact (safety 0.9; omega dt <= 2 undamped,
+    c dt / m <= 2 for a stiff damper, physics.md section 5).
 
     * Hertz mode: linearised stiffness k_H = 1.5 P^(1/3)/G at twice the largest static wheel load
-      (dynamic peaks), between half a wheelset and the rail node mass (rigid track: half a
-      wheelset on a fixed rail): omega = sqrt(k_H (1/m_w + 1/m_r)).
-    * Creep damping: the longitudinal creep force damps the wheelset spin, c = 2 f11 r0^2 / V,
-      and the lateral creep force the lateral motion, c = 2 f22 / V; explicit stability needs
-      c dt / m <= 2.
+      (dynamic peaks) between half a wheelset and the rail node under it:
+      omega = sqrt(k_H (1/m_w + 1/m_r,z)) (rigid track: 1/m_r = 0).
+    * Creep damping: the creep forces are viscous in the sliding velocities, with c = f11/V per
+      wheel on the spin (lever r0: c_spin = 2 f11 r0^2/V on the spin inertia), c = f22/V per
+      wheel laterally between the wheelset and the rail head (effective inverse mass of the head
+      1/m_y + h^2/I_roll). At low speed these become the stiffest "modes" of the system.
+    ``rail_inv_mass_*``: largest inverse mass of a rail node (z) and of the rail head (y).
     """
     p_max = 2.0 * float(model.static_wheel_load.max())
     k_h = 1.5 * p_max ** (1.0 / 3.0) / geom.hertz_g
     m_w = 0.5 * min(c.wheelset_mass for c in model.params.cars)
-    inv_m = 1.0 / m_w + (1.0 / rail_node_mass if rail_node_mass else 0.0)
-    omega = np.sqrt(k_h * inv_m)
+    omega = np.sqrt(k_h * (1.0 / m_w + rail_inv_mass_z))
     dt_hertz = 0.9 * 2.0 / omega
-    # creep coefficients at the largest load (conservative)
     tab = geom.table[geom.table.shape[0] // 2]
     c = (3.0 * p_max * (1 - geom.poisson ** 2) / (2 * geom.youngs_modulus * tab[6])) ** (1 / 3)
     ab = tab[4] * tab[5] * c * c
     f11, f22 = geom.shear_modulus * ab * tab[7], geom.shear_modulus * ab * tab[8]
     spin_inertia = min(c_.wheelset_spin_inertia for c_ in model.params.cars)
-    c_spin = 2 * f11 * geom.wheel_radius ** 2 / speed
-    c_lat = 2 * f22 / speed
-    dt_spin = 0.9 * 2.0 * spin_inertia / c_spin
-    dt_lat = 0.9 * 2.0 * 2 * m_w / c_lat
+    dt_spin = 0.9 * 2.0 * spin_inertia / (2 * f11 * geom.wheel_radius ** 2 / speed)
+    # lateral: wheelset (two wheels, mass 2 m_w) against the rail head of one wheel
+    inv_lat = max(1.0 / (2 * m_w) * 2.0, rail_inv_mass_y + 1.0 / (2 * m_w))
+    dt_lat = 0.9 * 2.0 / (f22 / speed * inv_lat)
     return {"dt_s": float(min(dt_hertz, dt_spin, dt_lat)), "dt_hertz_s": float(dt_hertz),
             "dt_creep_spin_s": float(dt_spin), "dt_creep_lateral_s": float(dt_lat),
             "hertz_stiffness_N_m": float(k_h)}
+
+
+def rail_inverse_masses(packed, head_height: float) -> tuple[float, float]:
+    """Largest inverse mass of a rail node vertically and of the rail head laterally
+    (1/m_y + h^2/I_roll), from the structure's lumped inverse masses."""
+    inv = np.asarray(packed.inv_mass)
+    z_max, y_max = 0.0, 0.0
+    for r in range(int(packed.n_rails)):
+        base = int(packed.rail_dof0[r]) + 5 * np.arange(int(packed.rail_n_nodes))
+        z_max = max(z_max, float(inv[base].max()))
+        y_max = max(y_max, float((inv[base + 2] + head_height ** 2 * inv[base + 4]).max()))
+    return z_max, y_max
 
 
 def _wheel_labels(model: TrainModel) -> list[str]:
@@ -447,12 +463,17 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
         head_height = train.contact.rail_head_height
         x_lead0 = float(sim.get("start_x_m") or 0.0)
         x_end = float(sim.get("end_x_m") or (x_lead0 + float(sim.get("rigid_length_m", 200.0))))
-        rail_node_mass = None
+        rail_inv = (0.0, 0.0)
         monitors = None
     elif track == "structure":
         from ..structure import build_structure
         from ..structure.monitors import compile_monitors, default_monitors
+        from ..structure import apply_factors
+        from .run import property_factors  # structure owner's random-property factors
         structure = build_structure(case.get("structure") or {})
+        factors = property_factors(case.get("properties"), structure)
+        if factors:
+            structure = apply_factors(structure, factors)
         packed = structure.packed
         head_height = structure.rail_head_height_m
         x_min, x_max = structure.rail_x_range
@@ -463,25 +484,39 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
                 f"the train ({train_len:.1f} m between end wheelsets) must stay on the modelled rails "
                 f"[{x_min:.1f}, {x_max:.1f}] m but runs with its leading wheelset from {x_lead0:.1f} "
                 f"to {x_end:.1f} m; lengthen the structure's approaches or set simulation.start_x_m/end_x_m")
-        rail_mass = float(structure.config["rail"]["mass_kg_m"]) * float(packed.rail_dx)
-        rail_node_mass = rail_mass
+        rail_inv = rail_inverse_masses(packed, head_height)
         specs = case.get("monitors") or default_monitors(structure)
         monitors = compile_monitors(structure, specs)
     else:
         raise ValueError(f"simulation.track: {track!r}; expected structure | rigid")
+    if sim.get("duration_s") is not None:
+        x_end = x_lead0 + speed * float(sim["duration_s"])
+        if structure is not None and x_end > structure.rail_x_range[1]:
+            raise ValueError(f"simulation.duration_s={sim['duration_s']} s takes the leading wheelset "
+                             f"to x = {x_end:.1f} m, beyond the rails; shorten it")
     if x_end <= x_lead0:
         raise ValueError(f"simulation: end_x_m {x_end} must exceed start_x_m {x_lead0}")
-    dt = float(sim.get("time_step_s", 1.0e-4))
-    limits = contact_time_step_limit(model, geom, speed, rail_node_mass)
-    if structure is not None:
+    limits = contact_time_step_limit(model, geom, speed, *rail_inv)
+    dt_setting = sim.get("time_step_s", 1.0e-4)
+    if dt_setting == "auto":
+        dt = limits["dt_s"]
+        if structure is not None:
+            dt = min(dt, structure.stable_time_step())
+        log.info("time_step_s auto: %.3g s (contact limit %.3g s)", dt, limits["dt_s"])
+    else:
+        dt = float(dt_setting)
+    if structure is not None and sim.get("check_time_step", True):
         structure.check_time_step(dt)
     if dt > limits["dt_s"]:
         raise ValueError(f"simulation.time_step_s={dt:g} s exceeds the wheel-rail contact stability "
                          f"limit {limits['dt_s']:.3g} s (Hertz {limits['dt_hertz_s']:.3g} s, creep "
                          f"{min(limits['dt_creep_spin_s'], limits['dt_creep_lateral_s']):.3g} s); "
-                         "reduce simulation.time_step_s")
-    out_dt = float(sim.get("output_interval_s", 1.0e-3))
-    out_every = max(1, int(round(out_dt / dt)))
+                         "reduce simulation.time_step_s (creep damping grows as 1/V: low speeds "
+                         "need smaller steps)")
+    if sim.get("output_every") is not None:
+        out_every = int(sim["output_every"])
+    else:
+        out_every = max(1, int(round(float(sim.get("output_interval_s", 1.0e-3)) / dt)))
     duration = (x_end - x_lead0) / speed
     n_steps = int(np.ceil(duration / dt / out_every)) * out_every
     irr = build_irregularity(case.get("irregularity"), x_lead0 - train_len - 1.0,

@@ -28,7 +28,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from .schema import (ResultsSchemaError, history_abscissa, history_quantities, read_validated,
-                     validate_extremes)
+                     sample_starts, validate_extremes)
 
 log = logging.getLogger(__name__)
 
@@ -251,17 +251,25 @@ class AggregationTrace:
 
 
 def _batch_matrices(df: pd.DataFrame, path: Path, abscissa: str, quantities: list[str]):
-    """Yield (scenario, grid, sample_index, weights, {quantity: (n_samples, n_points)}) per scenario."""
-    for scenario, block in df.groupby("scenario", sort=False):
-        block = block.sort_values(["sample_index", abscissa], kind="stable")
-        index = block["sample_index"].to_numpy()
-        starts = np.r_[True, index[1:] != index[:-1]]
-        n_samples = int(starts.sum())
-        n_points = len(block) // n_samples
-        x = block[abscissa].to_numpy(dtype=float)
-        grid = x[:n_points]
-        values = {q: block[q].to_numpy(dtype=float).reshape(n_samples, n_points) for q in quantities}
-        yield (scenario, grid, index[starts], block["weight"].to_numpy(dtype=float)[starts], values)
+    """Yield (scenario, grid, sample_index, weights, {quantity: (n_samples, n_points)}) per scenario.
+
+    Relies on the layout :func:`validate_histories` checked: rows of a sample contiguous, the
+    same grid for every sample of a scenario. No sort is needed: the moments and histograms do
+    not depend on the order of the samples.
+    """
+    codes, scenarios = pd.factorize(df["scenario"], sort=False)
+    index = df["sample_index"].to_numpy()
+    x = df[abscissa].to_numpy(dtype=float)
+    weight = df["weight"].to_numpy(dtype=float)
+    columns = {q: df[q].to_numpy(dtype=float) for q in quantities}
+    starts = sample_starts(codes, index)
+    for code, scenario in enumerate(scenarios):
+        rows = None if len(scenarios) == 1 else np.flatnonzero(codes == code)
+        pick = (lambda a: a) if rows is None else (lambda a, rows=rows: a[rows])
+        first = np.flatnonzero(pick(starts))
+        n_points = (len(index) if rows is None else rows.size) // first.size
+        values = {q: pick(col).reshape(first.size, n_points) for q, col in columns.items()}
+        yield (str(scenario), pick(x)[:n_points], pick(index)[first], pick(weight)[first], values)
 
 
 def _read_batch(path: Path, columns: list[str] | None, trace: AggregationTrace,
@@ -299,7 +307,9 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
 
     grids: dict[str, np.ndarray] = {}
     moments: dict[tuple[str, str], WeightedMoments] = {}
-    seen: dict[str, set[int]] = {}
+    # Sample indices already read, per scenario, to detect a sample in two files: the only state
+    # that grows with the number of samples (8 bytes per sample).
+    seen: dict[str, np.ndarray] = {}
     for path in paths:  # pass 1: moments and range
         names = pq.read_schema(path).names
         absent = [c for c in columns if c not in names]
@@ -309,17 +319,17 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
         for scenario, grid, index, weights, values in _batch_matrices(df, path, abscissa, quantities):
             if scenario not in grids:
                 grids[scenario] = grid
-                seen[scenario] = set()
+                seen[scenario] = np.empty(0, dtype=np.int64)
             elif grid.shape != grids[scenario].shape or not np.allclose(grid, grids[scenario],
                                                                          rtol=1e-9, atol=0.0):
                 raise ResultsSchemaError(f"{path}: column {abscissa!r}: scenario {scenario!r} uses "
                                          "a different grid than in the earlier files")
-            repeated = seen[scenario].intersection(index.tolist())
-            if repeated:
+            repeated = index[np.isin(index, seen[scenario])]
+            if repeated.size:
                 raise ResultsSchemaError(f"{path}: column 'sample_index': sample(s) "
-                                         f"{sorted(repeated)[:5]} of scenario {scenario!r} already "
-                                         "read from an earlier file")
-            seen[scenario].update(index.tolist())
+                                         f"{sorted(repeated.tolist())[:5]} of scenario {scenario!r} "
+                                         "already read from an earlier file")
+            seen[scenario] = np.union1d(seen[scenario], index)
             for q in quantities:
                 key = (scenario, q)
                 if key not in moments:
@@ -337,7 +347,7 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
 
     trace.state_nbytes = sum(m.nbytes for m in moments.values()) + sum(
         h.nbytes for h in histograms.values())
-    trace.samples = {s: len(v) for s, v in seen.items()}
+    trace.samples = {s: int(v.size) for s, v in seen.items()}
     results = {}
     for (scenario, q), m in moments.items():
         h = histograms[(scenario, q)]

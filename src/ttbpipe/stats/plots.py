@@ -47,12 +47,25 @@ _NAMES = {
 _SUFFIXES = ("_m_s2", "_rad_s2", "_m_s", "_rad_s", "_N_m", "_Pa", "_rad", "_N", "_m", "_s")
 
 
-def axis_label(column: str) -> str:
-    """Readable axis label with unit, e.g. ``'max. deck vertical acceleration (m/s²)'``."""
+def display_scale(column: str) -> tuple[float, str]:
+    """(factor, unit) for display: forces in kN and displacements in mm, everything else SI.
+
+    Values are multiplied by ``factor`` only when drawn; tables and files stay SI.
+    """
     try:
         unit = unit_of(column)
     except ValueError:
-        unit = "?"
+        return 1.0, "?"
+    if unit == "N":
+        return 1e-3, "kN"
+    if unit == "m" and "disp" in column:
+        return 1e3, "mm"
+    return 1.0, _UNIT_TEX.get(unit, unit)
+
+
+def axis_label(column: str) -> str:
+    """Readable axis label with display unit, e.g. ``'max. deck vertical acceleration (m/s²)'``."""
+    unit = display_scale(column)[1]
     name = _NAMES.get(column)
     if name is None:
         stem = column
@@ -61,7 +74,6 @@ def axis_label(column: str) -> str:
                 stem = stem[: -len(suffix)]
                 break
         name = stem.replace("_", " ").replace("acc", "acceleration").replace("disp", "displacement")
-    unit = _UNIT_TEX.get(unit, unit)
     return f"{name} ({unit})" if unit else f"{name} (–)"
 
 
@@ -95,13 +107,18 @@ def plot_exceedance_convergence(curves: Sequence[pd.DataFrame], *, log_x: bool =
         if zero.any():
             ax.step(n[zero], curve["upper_one_sided"].to_numpy()[zero], where="post", ls="--",
                     color="C3", label=f"one-sided {level} upper bound, no exceedance")
+        if "sufficient" in curve and bool(curve["sufficient"].iloc[-1]):
+            failing = np.flatnonzero(~curve["sufficient"].to_numpy(dtype=bool))
+            n_ok = n[failing[-1] + 1] if failing.size else n[0]
+            ax.axvline(n_ok, color="k", ls=":", lw=1, label=f"sufficient from n = {n_ok}")
         if log_x and n[-1] > 20:
             ax.set_xscale("log")
         ax.set_xlabel("number of samples (sample-index order)")
         ax.set_ylabel("P(max index > limit) (–)")
         ax.set_ylim(bottom=0)
-        ax.set_title(f"{a.get('limit', '')} > {a.get('threshold', '')}\nscenario {a.get('scenario', '')}",
-                     fontsize=9)
+        threshold = str(a.get("threshold", "")).replace("^2", "²")
+        ax.set_title(f"{a.get('description', a.get('limit', ''))} > {threshold}\n"
+                     f"scenario {a.get('scenario', '')}", fontsize=9)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
     for ax in list(axes.flat)[len(curves):]:
@@ -126,6 +143,7 @@ def plot_extreme_pdfs(extremes: pd.DataFrame, column: str, *, scenarios: Sequenc
     else:
         fig = ax.figure
     lower, upper = bounds_for(column)
+    factor, unit = display_scale(column)
     for i, scenario in enumerate(scenarios):
         block = extremes[extremes["scenario"] == scenario]
         if block.empty:
@@ -133,17 +151,17 @@ def plot_extreme_pdfs(extremes: pd.DataFrame, column: str, *, scenarios: Sequenc
         values = block[column].to_numpy(dtype=float)
         label = labels.get(scenario, str(scenario))
         if values.size < 2 or np.ptp(values) == 0:
-            ax.axvline(values[0], color=f"C{i}", lw=2, label=f"{label} (single value)")
+            ax.axvline(values[0] * factor, color=f"C{i}", lw=2, label=f"{label} (single value)")
             continue
         kde = ExtremeValueKDE(values, block["weight"].to_numpy(dtype=float), lower=lower,
                               upper=upper, boundary=boundary)
         x, pdf = kde.grid()
-        ax.plot(x, pdf, color=f"C{i}", label=f"{label} (n = {values.size})")
+        ax.plot(x * factor, pdf / factor, color=f"C{i}", label=f"{label} (n = {values.size})")
     if threshold is not None:
-        ax.axvline(threshold, color="k", ls=":", label="limit")
+        ax.axvline(threshold * factor, color="k", ls=":", label="limit")
     ax.set_xlabel(axis_label(column))
-    unit = _UNIT_TEX.get(unit_of(column), unit_of(column))
-    ax.set_ylabel(f"probability density ({'1/' + unit if unit else '–'})")
+    per = (f"1/({unit})" if "/" in unit else f"1/{unit}") if unit else "–"
+    ax.set_ylabel(f"probability density ({per})")
     ax.set_ylim(bottom=0)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
@@ -152,7 +170,7 @@ def plot_extreme_pdfs(extremes: pd.DataFrame, column: str, *, scenarios: Sequenc
 
 def plot_history_statistics(results: Mapping[tuple[str, str], HistoryStatistics], quantity: str, *,
                             scenarios: Sequence[str] | None = None,
-                            band: tuple[float, float] | None = (0.05, 0.95)) -> Figure:
+                            band: tuple[float, float] | None = None) -> Figure:
     """Mean (top) and standard deviation (bottom) of a quantity against time or position.
 
     One line per scenario (randomness conditions, TIPM vs MCM, ...), as the paper's Figs. 10-14;
@@ -163,14 +181,15 @@ def plot_history_statistics(results: Mapping[tuple[str, str], HistoryStatistics]
         raise ValueError(f"no statistics for quantity {quantity!r}")
     scenarios = list(scenarios) if scenarios is not None else sorted(k[0] for k in keys)
     fig, axes = _figure(2, 1, sharex=True, height=3.0)
+    factor = display_scale(quantity)[0]
     for i, scenario in enumerate(scenarios):
         r = results[(scenario, quantity)]
-        axes[0, 0].plot(r.abscissa, r.mean, color=f"C{i}", lw=1,
+        axes[0, 0].plot(r.abscissa, r.mean * factor, color=f"C{i}", lw=1,
                         label=f"{scenario} (n = {r.n_samples})")
         if band and band[0] in r.quantiles and band[1] in r.quantiles:
-            axes[0, 0].fill_between(r.abscissa, r.quantiles[band[0]], r.quantiles[band[1]],
-                                    color=f"C{i}", alpha=0.15, lw=0)
-        axes[1, 0].plot(r.abscissa, r.std, color=f"C{i}", lw=1, label=scenario)
+            axes[0, 0].fill_between(r.abscissa, r.quantiles[band[0]] * factor,
+                                    r.quantiles[band[1]] * factor, color=f"C{i}", alpha=0.12, lw=0)
+        axes[1, 0].plot(r.abscissa, r.std * factor, color=f"C{i}", lw=1, label=scenario)
     r0 = results[keys[0]]
     axes[0, 0].set_ylabel("mean of\n" + axis_label(quantity))
     axes[1, 0].set_ylabel("standard deviation of\n" + axis_label(quantity))
@@ -206,13 +225,14 @@ def plot_forecast_envelope(envelope: pd.DataFrame, *, threshold: float | None = 
         ax.set_xticks(x, envelope["scenario"].astype(str), rotation=30, ha="right")
         ax.set_xlabel("scenario (forecast horizon)")
     lo_q, hi_q = envelope.attrs.get("lower_q", 0.05), envelope.attrs.get("upper_q", 0.95)
-    ax.fill_between(x, envelope["lower"], envelope["upper"], alpha=0.25,
-                    label=f"{100 * lo_q:g}-{100 * hi_q:g} % quantiles")
-    ax.plot(x, envelope["mean"], marker="o", ms=3, label="mean")
-    ax.plot(x, envelope["lower"], lw=0.8, color="C0", ls="--")
-    ax.plot(x, envelope["upper"], lw=0.8, color="C0", ls="--")
+    factor = display_scale(column)[0] if column else 1.0
+    ax.fill_between(x, envelope["lower"] * factor, envelope["upper"] * factor, alpha=0.25,
+                    label=f"weighted {100 * lo_q:g}-{100 * hi_q:g} % quantiles")
+    ax.plot(x, envelope["mean"] * factor, marker="o", ms=3, label="weighted mean")
+    ax.plot(x, envelope["lower"] * factor, lw=0.8, color="C0", ls="--")
+    ax.plot(x, envelope["upper"] * factor, lw=0.8, color="C0", ls="--")
     if threshold is not None:
-        ax.axhline(threshold, color="k", ls=":", label="limit")
+        ax.axhline(threshold * factor, color="k", ls=":", label="limit")
     ax.set_ylabel(axis_label(column) if column else "index")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)

@@ -392,6 +392,7 @@ def convergence_curve(extremes: pd.DataFrame, limit: Limit, context: LimitContex
         np.where(full, 1.0 - curve["lower_one_sided"] <= crit.zero_exceedance_upper_bound,
                  half <= tol))
     curve.attrs.update(scenario=scenario, limit=limit.name, column=limit.column,
+                       description=limit.description,
                        threshold=limit.threshold_text(), method=settings.method,
                        confidence_level=settings.confidence_level)
     return curve

@@ -289,6 +289,13 @@ def history_quantities(columns) -> list[str]:
     return [c for c in columns if c not in skip]
 
 
+def sample_starts(scenario_codes: np.ndarray, sample_index: np.ndarray) -> np.ndarray:
+    """Boolean mask of the rows where a new (scenario, sample) block starts in a long table."""
+    starts = np.ones(len(sample_index), dtype=bool)
+    starts[1:] = (scenario_codes[1:] != scenario_codes[:-1]) | (sample_index[1:] != sample_index[:-1])
+    return starts
+
+
 def validate_histories(df: pd.DataFrame, source: str | os.PathLike[str] | None = None) -> pd.DataFrame:
     """Check a long-format time-history table; return it unchanged.
 
@@ -321,30 +328,36 @@ def validate_histories(df: pd.DataFrame, source: str | os.PathLike[str] | None =
     for spec in specs:
         _check_dtype(df, spec, where)
         _check_values(df, spec, where)
-    keys = df[["scenario", "sample_index"]]
-    starts = np.r_[True, (keys.iloc[1:].to_numpy() != keys.iloc[:-1].to_numpy()).any(axis=1)]
-    if int(starts.sum()) != len(keys.drop_duplicates()):
-        row = _first_bad_row(keys.duplicated().to_numpy() & starts)
-        raise ResultsSchemaError(f"{where}: column 'sample_index', row {row}: the rows of one "
-                                 "sample must be contiguous")
-    weights = df["weight"].to_numpy(dtype=float)
-    group = np.cumsum(starts) - 1
+    codes, scenarios = pd.factorize(df["scenario"], sort=False)
+    index = df["sample_index"].to_numpy()
+    starts = sample_starts(codes, index)
     first = np.flatnonzero(starts)
+    key = codes[first].astype(np.int64) * (int(index.max()) + 1) + index[first]
+    _, unique_pos = np.unique(key, return_index=True)
+    if unique_pos.size != first.size:
+        repeated = np.setdiff1d(np.arange(first.size), unique_pos)[0]
+        row = int(first[repeated])
+        raise ResultsSchemaError(f"{where}: column 'sample_index', row {row}: sample "
+                                 f"{int(index[row])} appears again; the rows of one sample must "
+                                 "be contiguous")
+    group = np.cumsum(starts) - 1
+    weights = df["weight"].to_numpy(dtype=float)
     changed = weights != weights[first][group]
     if changed.any():
         row = _first_bad_row(changed)
         raise ResultsSchemaError(f"{where}: column 'weight', row {row}: the weight changes within "
-                                 f"sample {int(df['sample_index'].iloc[row])}")
+                                 f"sample {int(index[row])}")
     x = df[abscissa].to_numpy(dtype=float)
-    for scenario, block in df.groupby("scenario", sort=False):
-        rows = block.index.to_numpy()
-        n_samples = block["sample_index"].nunique()
-        if len(block) % n_samples:
-            raise ResultsSchemaError(f"{where}: column {abscissa!r}: samples of scenario "
-                                     f"{scenario!r} have different numbers of points")
-        n_points = len(block) // n_samples
-        pos = df.index.get_indexer(rows)
-        grid = x[pos].reshape(n_samples, n_points)
+    counts = np.diff(np.r_[first, len(df)])
+    for code, scenario in enumerate(scenarios):
+        mine = codes[first] == code
+        if np.unique(counts[mine]).size != 1:
+            row = int(first[mine][_first_bad_row(counts[mine] != counts[mine][0])])
+            raise ResultsSchemaError(f"{where}: column {abscissa!r}, row {row}: samples of "
+                                     f"scenario {scenario!r} have different numbers of points")
+        n_points = int(counts[mine][0])
+        pos = (first[mine][:, None] + np.arange(n_points)).ravel()
+        grid = x[pos].reshape(-1, n_points)
         if n_points > 1 and not (np.diff(grid[0]) > 0).all():
             row = int(pos[_first_bad_row(np.diff(grid[0]) <= 0) + 1])
             raise ResultsSchemaError(f"{where}: column {abscissa!r}, row {row}: the abscissa must "
@@ -355,7 +368,7 @@ def validate_histories(df: pd.DataFrame, source: str | os.PathLike[str] | None =
             flat = _first_bad_row(off.ravel())
             raise ResultsSchemaError(f"{where}: column {abscissa!r}, row {int(pos[flat])}: every "
                                      f"sample of scenario {scenario!r} must use the same grid")
-    return df
+    return original
 
 
 def read_validated(path: str | os.PathLike[str], kind: str, columns: list[str] | None = None) -> pd.DataFrame:

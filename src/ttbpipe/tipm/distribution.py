@@ -42,6 +42,15 @@ DEFAULT_BANDS_M: tuple[tuple[float, float], ...] = ((2.0, 10.0), (10.0, 50.0), (
 
 FAMILIES = {"lognorm": stats.lognorm, "gamma": stats.gamma}
 
+#: fewer sections cannot support a goodness-of-fit test
+MIN_SECTIONS_FOR_FIT = 8
+
+FIT_COLUMNS = ("channel", "spatial_frequency_per_m", "wavelength_m", "family", "shape", "scale",
+               "ks_statistic", "ks_pvalue", "ad_statistic", "ad_pvalue", "loglik", "aic",
+               "n_sections", "best")
+SUMMARY_COLUMNS = ("channel", "family", "band_min_m", "band_max_m", "n_frequencies",
+                   "ks_not_rejected_share", "ks_pvalue_median", "ad_not_rejected_share", "best_share")
+
 
 def _anderson_darling(cdf_values: np.ndarray) -> float:
     """A² = −n − Σ (2i−1)/n [ln F(x_(i)) + ln(1 − F(x_(n+1−i)))] (Anderson & Darling 1954)."""
@@ -59,8 +68,8 @@ def fit_ordinate_distributions(population: PSDPopulation,
     ks_statistic, ks_pvalue, ad_statistic, ad_pvalue, loglik, aic,
     best, n_sections``. Needs at least 8 sections (fewer cannot support a test).
     """
-    if population.n_sections < 8:
-        raise ValueError(f"distribution fit needs >= 8 sections, the population has "
+    if population.n_sections < MIN_SECTIONS_FOR_FIT:
+        raise ValueError(f"distribution fit needs >= {MIN_SECTIONS_FOR_FIT} sections, the population has "
                          f"{population.n_sections}; widen the TIPM population")
     unknown = set(families) - set(FAMILIES)
     if unknown:
@@ -92,7 +101,7 @@ def fit_ordinate_distributions(population: PSDPopulation,
             for r in fits:
                 r["best"] = best
             rows.extend(fits)
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=list(FIT_COLUMNS))
 
 
 def summarize_fits(fits: pd.DataFrame, bands_m: Sequence[tuple[float, float]] = DEFAULT_BANDS_M,
@@ -113,4 +122,4 @@ def summarize_fits(fits: pd.DataFrame, bands_m: Sequence[tuple[float, float]] = 
                          "ad_not_rejected_share": float((g["ad_pvalue"] >= alpha).mean())
                          if g["ad_pvalue"].notna().all() else np.nan,
                          "best_share": float((g["best"] == family).mean())})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))

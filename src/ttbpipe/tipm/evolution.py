@@ -37,6 +37,7 @@ from typing import Iterator, Sequence
 
 import numpy as np
 import pandas as pd
+from numba import njit
 
 from .population import PSDPopulation
 
@@ -68,6 +69,36 @@ def matched_transitions(populations: Sequence[PSDPopulation]) -> list[tuple[np.n
         if idx_b:
             pairs.append((before.psd_mm2_m[idx_b], after.psd_mm2_m[idx_a]))
     return pairs
+
+
+@njit(cache=True)
+def _step_kernel(state, p, edges, quantiles, floor, out):
+    """One step of eq. 54 for ``state[n, F, C]`` with index ``p[n]``: out = max(state +
+    F⁻¹_{f,c,g(state)}(p), floor), F⁻¹ linearly interpolated on the uniform probability grid of
+    ``quantiles[F, C, Z, P]``; partition g = number of inner edges ``edges[f, c, 1:Z]`` <= state.
+    Returns the number of floored ordinates."""
+    n, n_f, n_c = state.shape
+    n_z = quantiles.shape[2]
+    n_p = quantiles.shape[3]
+    hits = 0
+    for i in range(n):
+        position = p[i] * (n_p - 1)
+        lower = min(int(np.floor(position)), n_p - 2)
+        frac = position - lower
+        for f in range(n_f):
+            for c in range(n_c):
+                value = state[i, f, c]
+                g = 0
+                for e in range(1, n_z):
+                    if value >= edges[f, c, e]:
+                        g += 1
+                q0 = quantiles[f, c, g, lower]
+                new = value + q0 + frac * (quantiles[f, c, g, lower + 1] - q0)
+                if new < floor[f, c]:
+                    new = floor[f, c]
+                    hits += 1
+                out[i, f, c] = new
+    return hits
 
 
 @dataclass
@@ -222,11 +253,20 @@ class SpectralEvolution:
         return q_lo + frac * (q_hi - q_lo)
 
     def step(self, state: np.ndarray, p: np.ndarray | float) -> tuple[np.ndarray, int]:
-        """Eq. 54: one inspection interval ahead; returns (new state, number of floor hits)."""
-        new = np.asarray(state, float) + self.increment(state, p)
-        floor = self.fitted.floor
-        hits = new < floor
-        return np.where(hits, floor, new), int(hits.sum())
+        """Eq. 54: one inspection interval ahead; returns (new state, number of floor hits).
+
+        Same arithmetic as ``state + increment(state, p)`` floored at P_l, in the numba kernel
+        :func:`_step_kernel` (tests compare the two).
+        """
+        fit = self.fitted
+        state = np.ascontiguousarray(state, dtype=float)
+        n_f, n_c = state.shape[-2:]
+        lead = state.shape[:-2]
+        p = np.ascontiguousarray(np.broadcast_to(np.clip(np.asarray(p, float), 0.0, 1.0), lead)).reshape(-1)
+        flat = state.reshape(-1, n_f, n_c)
+        out = np.empty_like(flat)
+        hits = _step_kernel(flat, p, fit.edges, fit.quantiles, fit.floor, out)
+        return out.reshape(state.shape), int(hits)
 
     def steps_for(self, horizon_months: float) -> int:
         return max(1, int(round(float(horizon_months) / self.interval_months)))

@@ -16,7 +16,8 @@ import numpy as np
 import pandas as pd
 
 from ..io import read_table
-from .distribution import fit_ordinate_distributions, summarize_fits
+from .distribution import (FIT_COLUMNS, MIN_SECTIONS_FOR_FIT, SUMMARY_COLUMNS,
+                           fit_ordinate_distributions, summarize_fits)
 from .evolution import SpectralEvolution, forecast_coverage
 from .population import PSDPopulation
 from .profiles import (STREAM_FORECAST, STREAM_MONTE_CARLO, STREAM_REPRESENTATIVE, date_key,
@@ -35,7 +36,7 @@ DEFAULTS: dict[str, Any] = {
                   "match_variance": True},
     "profiles": {"length_m": 1000.0, "dx_m": 0.25},
     "evolution": {"n_partitions": 5, "partition_scale": "log", "min_partition_count": 10},
-    "forecast": {"horizons_months": [6, 12], "levels": [0.05, 0.5, 0.95], "monte_carlo_paths": 500},
+    "forecast": {"horizons_months": [6, 12], "levels": [0.05, 0.5, 0.95], "monte_carlo_paths": 200},
     "validation": {"holdout_campaigns": 12, "band": [0.05, 0.95], "monte_carlo_paths": 500},
 }
 
@@ -120,6 +121,11 @@ def distribution_stage(psd_paths: Sequence[str | Path], psd: Mapping[str, Any]
                        ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(per-frequency fits, per-channel-and-band summary) of a campaign's population."""
     population = PSDPopulation.concat(load_population(psd_paths, psd.get("wavelength_band_m")))
+    if population.n_sections < MIN_SECTIONS_FOR_FIT:
+        log.warning("population of %d sections: fewer than %d, no distribution fit (empty tables); "
+                    "later campaigns enlarge the population", population.n_sections,
+                    MIN_SECTIONS_FOR_FIT)
+        return pd.DataFrame(columns=FIT_COLUMNS), pd.DataFrame(columns=SUMMARY_COLUMNS)
     fits = fit_ordinate_distributions(population)
     return fits, summarize_fits(fits)
 

@@ -1,0 +1,177 @@
+# Stage: track irregularity probabilistic model (TIPM) and spectral evolution
+# (seed paper sec. 3.2-3.3 and 5.3-5.4; docs/tipm.md).
+#
+# Incremental by construction: campaign t's selection, profiles and distribution fit read only
+# the PSDs of campaigns up to t (tipm.population_campaigns), so adding a later campaign reruns
+# nothing of earlier campaigns; the evolution model, the forecast and the hold-out validation
+# genuinely depend on every campaign and are refitted.
+
+from ttbpipe.tipm.stages import population_dates as _tipm_population_dates
+
+TIPM = config.get("tipm", {})
+TIPM_LAST = list(CAMPAIGNS)[-1]
+
+
+def tipm_population_psds(wildcards) -> list[str]:
+    """PSD tables of the campaigns forming campaign {date}'s population (never a later one)."""
+    dates = _tipm_population_dates(list(CAMPAIGNS), wildcards.date,
+                                   TIPM.get("population_campaigns", "all"))
+    return [f"results/psd/{d}.parquet" for d in dates]
+
+
+rule tipm_select:
+    """Representative PSD sets with probability weights for one campaign's population."""
+    input:
+        tipm_population_psds,
+    output:
+        selection="results/tipm/selection/{date}.parquet",
+        weights="results/tipm/selection/{date}.weights.parquet",
+        metrics="results/tipm/selection/{date}.metrics.parquet",
+    params:
+        tipm=TIPM,
+        psd=config["psd"],
+        version=MODEL_VERSION,
+    log:
+        "logs/tipm/select/{date}.log",
+    script:
+        "../scripts/tipm_select.py"
+
+
+rule tipm_profiles:
+    """Space-domain irregularity profiles of one campaign's representative sets."""
+    input:
+        selection="results/tipm/selection/{date}.parquet",
+        weights="results/tipm/selection/{date}.weights.parquet",
+    output:
+        "results/tipm/profiles/{date}.parquet",
+    params:
+        tipm=TIPM,
+        psd=config["psd"],
+        seed=config["study"]["seed"],
+        version=MODEL_VERSION,
+    log:
+        "logs/tipm/profiles/{date}.log",
+    script:
+        "../scripts/tipm_profiles.py"
+
+
+rule tipm_distribution:
+    """Per-frequency lognormal and gamma fits of the PSD ordinates of one campaign's population."""
+    input:
+        tipm_population_psds,
+    output:
+        fits="results/tipm/distribution/{date}.parquet",
+        summary="results/tipm/distribution/{date}.summary.parquet",
+    params:
+        psd=config["psd"],
+        version=MODEL_VERSION,
+    log:
+        "logs/tipm/distribution/{date}.log",
+    script:
+        "../scripts/tipm_distribution.py"
+
+
+rule tipm_evolution:
+    """Spectral evolution model (eqs. 50-53) fitted on every campaign."""
+    input:
+        expand("results/psd/{date}.parquet", date=CAMPAIGNS),
+    output:
+        "results/tipm/evolution.parquet",
+    params:
+        tipm=TIPM,
+        psd=config["psd"],
+        version=MODEL_VERSION,
+    log:
+        "logs/tipm/evolution.log",
+    script:
+        "../scripts/tipm_evolution.py"
+
+
+rule tipm_forecast:
+    """Forecast of the latest campaign's representative sets (eqs. 54, 56) and their profiles."""
+    input:
+        model="results/tipm/evolution.parquet",
+        selection=f"results/tipm/selection/{TIPM_LAST}.parquet",
+        weights=f"results/tipm/selection/{TIPM_LAST}.weights.parquet",
+    output:
+        forecast="results/tipm/forecast.parquet",
+        states="results/tipm/forecast_states.parquet",
+        profiles="results/tipm/forecast_profiles.parquet",
+    params:
+        tipm=TIPM,
+        psd=config["psd"],
+        seed=config["study"]["seed"],
+        base_date=TIPM_LAST,
+        version=MODEL_VERSION,
+    log:
+        "logs/tipm/forecast.log",
+    script:
+        "../scripts/tipm_forecast.py"
+
+
+rule tipm_validate:
+    """Hold-out validation: fit on all but the last campaigns, forecast them, score coverage."""
+    input:
+        expand("results/psd/{date}.parquet", date=CAMPAIGNS),
+    output:
+        coverage="results/tipm/validation/coverage.parquet",
+        tqi="results/tipm/validation/tqi.parquet",
+        summary="results/tipm/validation/summary.json",
+        figure=report(
+            "results/figures/tipm_forecast.png",
+            caption="../report/tipm_forecast.rst",
+            category="2. TIPM and spectral evolution",
+        ),
+    params:
+        tipm=TIPM,
+        psd=config["psd"],
+        seed=config["study"]["seed"],
+        version=MODEL_VERSION,
+    log:
+        "logs/tipm/validate.log",
+    script:
+        "../scripts/tipm_validate.py"
+
+
+rule tipm_figures:
+    """PSD percentile bands and the selected sets against the population (latest campaign)."""
+    input:
+        psd=lambda wildcards: tipm_population_psds(wildcards),
+        selection="results/tipm/selection/{date}.parquet",
+        weights="results/tipm/selection/{date}.weights.parquet",
+        metrics="results/tipm/selection/{date}.metrics.parquet",
+    output:
+        bands=report(
+            "results/figures/tipm_psd_bands_{date}.png",
+            caption="../report/tipm_psd_bands.rst",
+            category="2. TIPM and spectral evolution",
+        ),
+        fidelity=report(
+            "results/figures/tipm_selection_{date}.png",
+            caption="../report/tipm_selection.rst",
+            category="2. TIPM and spectral evolution",
+        ),
+    params:
+        psd=config["psd"],
+        version=MODEL_VERSION,
+    log:
+        "logs/tipm/figures/{date}.log",
+    script:
+        "../scripts/tipm_figures.py"
+
+
+def tipm_targets() -> list[str]:
+    """Final TIPM outputs: every campaign's selection and profiles, the latest campaign's
+    distribution fit and figures, the forecast and the hold-out validation."""
+    targets = expand("results/tipm/profiles/{date}.parquet", date=CAMPAIGNS)
+    targets += [
+        f"results/tipm/distribution/{TIPM_LAST}.parquet",
+        f"results/figures/tipm_psd_bands_{TIPM_LAST}.png",
+        f"results/figures/tipm_selection_{TIPM_LAST}.png",
+    ]
+    if len(CAMPAIGNS) >= 2:
+        targets.append("results/tipm/forecast.parquet")
+    holdout = int(TIPM.get("validation", {}).get("holdout_campaigns", 12))
+    if len(CAMPAIGNS) >= holdout + 3:
+        targets.append("results/tipm/validation/summary.json")
+    return targets
