@@ -144,7 +144,8 @@ def test_convergence_curve_in_sample_index_order_and_final_point():
     full = BinomialExceedance().estimate(df["max_derailment_coefficient"].to_numpy() > 0.3)
     assert a["probability"].iloc[-1] == pytest.approx(full.probability, abs=1e-12)
     assert a["ci_high"].iloc[-1] == pytest.approx(full.ci_high, abs=1e-12)
-    assert (a["ci_low"] <= a["probability"] + 1e-15).all() and (a["probability"] <= a["ci_high"] + 1e-15).all()
+    assert (a["ci_low"] <= a["probability"] + 1e-15).all()
+    assert (a["probability"] <= a["ci_high"] + 1e-15).all()
 
 
 def test_sufficiency_verdict():
@@ -198,3 +199,33 @@ def test_assess_limits_counts_and_not_evaluated():
     tipm = table[(table.scenario == "tipm") & (table.limit == "derailment_coefficient")].iloc[0]
     expected = np.sum(w * (b["max_derailment_coefficient"] > 0.3)) / w.sum()
     assert bool(tipm.weighted) and tipm.probability == pytest.approx(expected, abs=1e-12)
+
+
+def test_config_limits_section_matches_schema_and_code():
+    """config/config.yaml limits: validates against its JSON-schema block (Draft 2020-12), the
+    schema's limit-name enums equal the code's limit names, and the section loads."""
+    from pathlib import Path
+
+    import jsonschema
+    import yaml
+
+    root = Path(__file__).parents[1]
+    config = yaml.safe_load((root / "config" / "config.yaml").read_text())
+    schema = yaml.safe_load((root / "workflow" / "schemas" / "config.schema.yaml").read_text())
+    block = schema["properties"]["limits"]
+    jsonschema.Draft202012Validator(block).validate(config["limits"])
+    names = {lim.name for lim in L.default_limits()}
+    assert set(block["properties"]["disabled"]["items"]["enum"]) == names
+    constant = {lim.name for lim in L.default_limits() if isinstance(lim, L.ConstantLimit)}
+    assert set(block["properties"]["thresholds"]["propertyNames"]["enum"]) == constant
+    limits, context = L.limits_from_config(config["limits"])
+    settings = ReliabilitySettings.from_config(config["limits"])
+    assert len(limits) == len(names) and settings.confidence_level == 0.95
+
+
+def test_applied_threshold_is_reported():
+    """The table states the threshold actually applied (0.8 at 300 km/h), the rule separately."""
+    df = example_extremes(range(50), "C1")  # train_speed_m_s = 300 km/h
+    limits = [lim for lim in L.default_limits() if lim.name == "wheel_unloading_ratio"]
+    row = assess_limits(df, limits).iloc[0]
+    assert row.threshold == "0.8" and "160 km/h" in row.rule

@@ -99,3 +99,36 @@ def test_figures_have_units_and_data(extremes, tmp_path):
     (x, y), = [line.get_data() for line in fig.axes[0].get_lines() if line.get_label() == "weighted mean"]
     np.testing.assert_allclose(y, env["mean"] / 1e3, rtol=1e-12)
     assert io.save_figure(fig, tmp_path / "env.pdf").exists()
+
+
+def test_stats_report_cli_end_to_end(tmp_path):
+    """`ttbpipe stats-report` on two dated scenarios writes the tables, the page and the figures;
+    the reliability table read back equals assess_limits on the same data."""
+    from ttbpipe.cli import main
+    from ttbpipe.stats.limits import default_limits
+
+    keep = ["sample_index", "scenario", "weight", "seed_entropy", "train_speed_m_s",
+            "static_wheel_load_N", "max_derailment_coefficient", "max_deck_vertical_acc_m_s2"]
+    ext, hist = [], []
+    for i, date in enumerate(["2024-01-15", "2024-07-15"]):
+        for b in range(2):
+            index = range(50 * b, 50 * b + 50)
+            ext.append(io.write_table(example_extremes(index, date, seed=i)[keep],
+                                      tmp_path / f"e_{date}_{b}.parquet"))
+            hist.append(io.write_table(example_histories(index, date, seed=i, n_points=40),
+                                       tmp_path / f"h_{date}_{b}.parquet"))
+    out = tmp_path / "out"
+    argv = ["stats-report", "--extremes", *map(str, ext), "--histories", *map(str, hist),
+            "--out", str(out)]
+    assert main(argv) == 0
+    table = io.read_table(out / "reliability.parquet")
+    expected = assess_limits(A.read_extremes(ext), default_limits())
+    pd.testing.assert_series_equal(table["probability"], expected["probability"])
+    assert (out / "summary.rst").read_text().startswith("Reliability summary")
+    names = sorted(p.name for p in (out / "figures").iterdir())
+    assert "pdf_max_derailment_coefficient.png" in names
+    assert "envelope_max_deck_vertical_acc_m_s2.png" in names
+    assert "history_rail_vertical_acc_m_s2.png" in names
+    assert "convergence_2024-01-15.png" in names
+    assert set(io.read_table(out / "table1_std.parquet").columns) == {"index", "2024-01-15",
+                                                                     "2024-07-15"}

@@ -7,27 +7,22 @@ accurate. Hence the energy E = (v^T M v + u^T K u)/2 of an undamped structure
     within 20 % of that in the first quarter, and
 (b) deviates from E_0 by an error of second order: halving dt divides the largest deviation by
     4 (accepted 3..5).
-All damping is zeroed; the initial state is the static deflection under a wheel pair, released.
+All damping is zeroed (config/validation/undamped_free_vibration.yaml); the initial state is the static deflection under a wheel pair, released.
 """
+
+from pathlib import Path
 
 import numpy as np
 from scipy.sparse import linalg as splinalg
 
+from ttbpipe.simulation.config import load_case
 from ttbpipe.structure import build_structure
 from ttbpipe.structure.integrator import stable_time_step
 from ttbpipe.structure.kernels import (_add_rail_point_force, _structure_accelerations,
                                        _zhai_predict)
 
-UNDAMPED = {
-    "layout": {"approach_length_m": 8.0, "spans_m": [12.0], "approach_track": "ballasted"},
-    "fastener": {"cz_Ns_m": 0.0, "cy_Ns_m": 0.0},
-    "ca": {"cz_Ns_m2": 0.0, "cy_Ns_m2": 0.0},
-    "girder": {"damping_ratio": 0.0, "element_length_m": 1.0},
-    "bearing": {"cz_Ns_m": 0.0, "cy_Ns_m": 0.0},
-    "pier": {"cy_Ns_m": 0.0, "cz_Ns_m": 0.0, "croll_Nms_rad": 0.0},
-    "ballasted": {"ballast_cz_Ns_m": 0.0, "ballast_cy_Ns_m": 0.0, "shear_c_Ns_m": 0.0,
-                  "subgrade_c_Ns_m": 0.0},
-}
+CASE = Path(__file__).resolve().parents[1] / "config" / "validation" / "undamped_free_vibration.yaml"
+UNDAMPED = load_case(CASE)["structure"]
 
 
 def run_energy(m, M, K, dt, duration):

@@ -26,9 +26,11 @@ def model():
     return build_structure(SMALL)
 
 
-@pytest.mark.parametrize("approach", ["ballasted", "slab", "rigid"])
-def test_accelerations_match_sparse_reference(approach):
-    cfg = {**SMALL, "layout": {**SMALL["layout"], "approach_track": approach}}
+@pytest.mark.parametrize("approach,slab", [("ballasted", "continuous"), ("slab", "discrete"),
+                                           ("rigid", "continuous")])
+def test_accelerations_match_sparse_reference(approach, slab):
+    cfg = {**SMALL, "layout": {**SMALL["layout"], "approach_track": approach},
+           "slab": {"type": slab}}
     m = build_structure(cfg)
     M, K, C = m.matrices()
     rng = np.random.default_rng(1)
@@ -86,3 +88,27 @@ def test_time_step_check_names_remedy(model):
     model.check_time_step(0.9 * limit)
     with pytest.raises(ValueError, match="time_step_s"):
         model.check_time_step(1.2 * limit)
+
+
+def test_static_signs_follow_axes():
+    """+Fy moves the rail left (+y), +Mx rolls it positively, -Fz pushes it down; a down load on
+    the left rail lowers the left seat, so the slab rolls negative (left side down).
+    Axes: channels.py (y left, z up, roll right-hand about +x: positive roll lifts the left)."""
+    m = build_structure({"layout": {"approach_length_m": 6.0, "spans_m": [12.0]},
+                         "girder": {"element_length_m": 1.0}})
+    _, K, _ = m.matrices()
+    solve = splinalg.factorized(K.tocsc())
+    x = 12.0
+    for (Fz, Fy, Mx), check in (((-1e4, 0, 0), lambda k: k[0] < 0),
+                                ((0, 1e4, 0), lambda k: k[2] > 0),
+                                ((0, 0, 1e3), lambda k: k[4] > 0)):
+        f = np.zeros(m.n_dof)
+        _add_rail_point_force(m.packed, 0, x, Fz, Fy, Mx, f)
+        u = solve(f)
+        assert check(_rail_point_kinematics(m.packed, 0, x, u, u))
+    f = np.zeros(m.n_dof)
+    _add_rail_point_force(m.packed, 0, x, -1e5, 0, 0, f)
+    u = solve(f)
+    from ttbpipe.structure.monitors import point_rows
+    d, c = point_rows(m, {"kind": "slab", "x_m": x})["roll"]
+    assert float(u[np.asarray(d)] @ c) < 0

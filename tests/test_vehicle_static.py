@@ -22,12 +22,13 @@ def test_vehicle_static_newton_matches_weight_distribution():
     weight (closed form above) to 1e-9, and the lateral DOFs stay exactly at rest."""
     train = TrainParameters()
     model = build_train_model(train)
-    q, wheel = solve_vehicle_static(model, build_geometry(train.contact), 80.0)
+    q, wheel, v = solve_vehicle_static(model, build_geometry(train.contact), 80.0)
     p_ref = _weight_distribution(train)
     assert np.allclose(wheel[:, 0, 2], p_ref, rtol=1e-9)
     assert np.allclose(wheel[:, 1, 2], p_ref, rtol=1e-9)
     lateral = np.concatenate([q[Y::5], q[ROLL::5], q[YAW::5]])
     assert np.max(np.abs(lateral)) < 1e-12
+    assert np.max(np.abs(v)) < 1e-12   # perfect rigid track: nominal rolling, no spin correction
     # total vertical contact force = total weight (equilibrium, 1e-9)
     total = sum(c.total_mass for c in train.cars) * GRAVITY
     assert wheel[:, :, 2].sum() == pytest.approx(total, rel=1e-9)

@@ -21,8 +21,9 @@ from jsonschema import Draft202012Validator
 @lru_cache(maxsize=1)
 def schema() -> dict:
     """The case schema (packaged JSON)."""
-    return json.loads(resources.files("ttbpipe.schemas").joinpath(
-        "simulation.schema.json").read_text())
+    # files("ttbpipe") / "schemas": works whether or not schemas/ is a package (package-data)
+    return json.loads(resources.files("ttbpipe").joinpath("schemas", "simulation.schema.json")
+                      .read_text())
 
 
 def _path(err) -> str:

@@ -319,7 +319,9 @@ def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: flo
     rails = rails_from_spectral(spec["vertical"], spec["alignment"], spec["cross_level"], spec["gauge"])
     values = np.vstack([rails["z_left"], rails["z_right"], rails["y_left"], rails["y_right"]])
     fade = float(cfg.get("fade_in_m", 20.0))
-    s = np.clip((chain - x_fade_start) / max(fade, 1e-9), 0.0, 1.0)
+    # start two grid steps ahead so that the interpolated value AND slope are exactly 0 at the
+    # leading wheelset's start (central-difference slopes reach one point back)
+    s = np.clip((chain - x_fade_start - 2.0 * dx) / max(fade, 1e-9), 0.0, 1.0)
     window = 0.5 - 0.5 * np.cos(np.pi * s)
     values = values * window
     slopes = np.gradient(values, dx, axis=1)
@@ -398,6 +400,7 @@ class CoupledSetup:
     head_height: float
     monitors: Any
     q0: np.ndarray
+    v0: np.ndarray             # zero except the steady spin-rate perturbations
     disp0: np.ndarray
     f_const: np.ndarray
     static_wheel: np.ndarray   # (n_ws, 2, 7) contact table of the static state
@@ -415,15 +418,16 @@ def _rail_kin_at(packed, disp, ws_x, head_height, irr: Irregularity) -> np.ndarr
 def static_equilibrium(model, geom, speed, packed, structure_static, head_height, irr, ws_x,
                        tol_load: float = 1e-3, max_iter: int = 30):
     """Train + structure static state: fixed point between the vehicle Newton solve and the
-    structure's linear static solve. Returns (q, disp, wheel, iterations)."""
+    structure's linear static solve. Returns (q, v, disp, wheel, iterations); v is zero except
+    the wheelsets' steady spin rates."""
     n_s = int(packed.n_dof)
     disp = np.zeros(n_s)
     prev = None
     for it in range(1, max_iter + 1):
         rail_kin = _rail_kin_at(packed, disp, ws_x, head_height, irr)
-        q, wheel = solve_vehicle_static(model, geom, speed, rail_kin)
+        q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin)
         if structure_static is None:
-            return q, disp, wheel, it
+            return q, v, disp, wheel, it
         force = np.zeros(n_s)
         for w in range(ws_x.size):
             for k in range(2):
@@ -434,8 +438,8 @@ def static_equilibrium(model, geom, speed, packed, structure_static, head_height
         loads = wheel[:, :, 2]
         if prev is not None and np.max(np.abs(loads - prev)) < tol_load:
             rail_kin = _rail_kin_at(packed, disp, ws_x, head_height, irr)
-            q, wheel = solve_vehicle_static(model, geom, speed, rail_kin)
-            return q, disp, wheel, it
+            q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin)
+            return q, v, disp, wheel, it
         prev = loads
     raise RuntimeError(f"train-structure static equilibrium did not converge in {max_iter} "
                        "iterations; check the structure supports and the suspension stiffness")
@@ -523,12 +527,12 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
                              x_end + speed * dt * out_every + 1.0, x_lead0)
     ws_x = x_lead0 + model.wheelset_x
     sstatic = StructureStatic(structure) if structure is not None else None
-    q0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, packed, sstatic, head_height,
+    q0, v0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, packed, sstatic, head_height,
                                                   irr, ws_x)
     f_const = model.gravity_force + model.coupler_stiffness @ q0
     return CoupledSetup(train=train, model=model, geom=geom, speed=speed, dt=dt, n_steps=n_steps,
                         out_every=out_every, x_lead0=x_lead0, irregularity=irr, structure=structure,
-                        packed=packed, head_height=head_height, monitors=monitors, q0=q0,
+                        packed=packed, head_height=head_height, monitors=monitors, q0=q0, v0=v0,
                         disp0=disp0, f_const=f_const, static_wheel=wheel0, dt_limits=limits,
                         static_iterations=iters)
 
@@ -554,7 +558,7 @@ def integrate(setup: CoupledSetup) -> RawResult:
     n_v = m.n_dof
     n_out = setup.n_steps // setup.out_every + 1
     q = setup.q0.copy()
-    v = np.zeros(n_v)
+    v = setup.v0.copy()
     a = np.zeros(n_v)
     a_prev = np.zeros(n_v)
     disp = setup.disp0.copy()

@@ -5,7 +5,9 @@ source says how well it is established there: [V] verified against the standard'
 script implementing it, [M] quoted from memory / secondary literature and to be confirmed.
 
 A limit is exceeded by a sample when its response index is **strictly greater** than the
-sample's threshold. Thresholds are in SI units like the extremes table. Three kinds:
+sample's threshold. Thresholds are in SI units like the extremes table. ``category`` is
+``'limit'`` (a safety or serviceability limit) or ``'grade'`` (a quality grade boundary such as
+Sperling 'excellent' / 'good', reported separately). Three kinds:
 
 * :class:`ConstantLimit`: one threshold for every sample;
 * :class:`SpeedDependentLimit`: wheel unloading, 0.65 up to 160 km/h and 0.8 above;
@@ -58,6 +60,7 @@ class ConstantLimit:
     unit: str
     source: str
     description: str
+    category: str = "limit"
 
     def thresholds(self, df: pd.DataFrame, context: LimitContext = LimitContext()) -> np.ndarray:
         """Per-sample threshold (SI), one per row of ``df``."""
@@ -86,6 +89,7 @@ class SpeedDependentLimit:
     unit: str
     source: str
     description: str
+    category: str = "limit"
 
     def thresholds(self, df: pd.DataFrame, context: LimitContext = LimitContext()) -> np.ndarray:
         if "train_speed_m_s" in df.columns:
@@ -118,6 +122,7 @@ class StaticLoadLimit:
     unit: str
     source: str
     description: str
+    category: str = "limit"
 
     def thresholds(self, df: pd.DataFrame, context: LimitContext = LimitContext()) -> np.ndarray:
         if "static_wheel_load_N" in df.columns:
@@ -138,6 +143,15 @@ Limit = ConstantLimit | SpeedDependentLimit | StaticLoadLimit
 
 #: Deck vertical acceleration limits (m/s^2) by track type, EN 1990 A2 A2.4.4.2.1.
 DECK_VERTICAL_ACC_M_S2 = {"ballasted": 3.5, "ballastless": 5.0}
+
+
+def applied_threshold_text(limit: Limit, thresholds: np.ndarray) -> str:
+    """The thresholds actually applied to a set of samples: one value, or the range."""
+    unit = "" if limit.unit == "1" else f" {limit.unit}"
+    lo, hi = float(np.min(thresholds)), float(np.max(thresholds))
+    if lo == hi:
+        return f"{lo:.4g}{unit}"
+    return f"{lo:.4g} to {hi:.4g}{unit} (per sample)"
 
 
 def default_limits(deck_track_type: str = "ballastless") -> list[Limit]:
@@ -166,8 +180,9 @@ def default_limits(deck_track_type: str = "ballastless") -> list[Limit]:
         for grade, value in (("excellent", 2.5), ("good", 2.75), ("pass", 3.0)):
             limits.append(ConstantLimit(
                 f"sperling_{axis}_{grade}", f"sperling_{axis}", value, "1",
-                f"Sperling ride index grades 2.5 excellent / 2.75 good / 3.0 pass [M]",
-                f"{axis} Sperling index, grade '{grade}'"))
+                "Sperling ride index grades 2.5 excellent / 2.75 good / 3.0 pass [M]",
+                f"{axis} Sperling index, grade '{grade}'",
+                category="limit" if grade == "pass" else "grade"))
     limits += [
         ConstantLimit("deck_vertical_acc", "max_deck_vertical_acc_m_s2",
                       DECK_VERTICAL_ACC_M_S2[deck_track_type], "m/s^2",

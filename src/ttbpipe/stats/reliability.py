@@ -24,7 +24,8 @@ import numpy as np
 import pandas as pd
 from scipy import special, stats
 
-from .limits import Limit, LimitContext, LimitNotEvaluable, limits_from_config
+from .limits import (Limit, LimitContext, LimitNotEvaluable, applied_threshold_text,
+                     limits_from_config)
 
 log = logging.getLogger(__name__)
 
@@ -267,13 +268,13 @@ class SampleSizeCriterion:
 
     def judge(self, est: ExceedanceEstimate) -> tuple[bool, str]:
         level = f"{100 * est.confidence_level:g} %"
+        bound = self.zero_exceedance_upper_bound
         if est.n_exceed == 0:
-            ok = est.upper_one_sided <= self.zero_exceedance_upper_bound
+            ok = est.upper_one_sided <= bound
+            needed = _zero_exceedance_samples(est.confidence_level, bound)
             return ok, (f"no exceedance; P < {est.upper_one_sided:.3g} at {level} (one-sided); "
                         + ("sufficient" if ok else
-                           f"needs upper bound <= {self.zero_exceedance_upper_bound:g}, about "
-                           f"{_zero_exceedance_samples(est.confidence_level, self.zero_exceedance_upper_bound)}"
-                           " effective samples"))
+                           f"needs upper bound <= {bound:g}, about {needed} effective samples"))
         if est.n_exceed == est.n_samples:
             ok = 1.0 - est.lower_one_sided <= self.zero_exceedance_upper_bound
             return ok, (f"every sample exceeds; P > {est.lower_one_sided:.3g} at {level} (one-sided); "
@@ -336,7 +337,8 @@ def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
                                   settings.effective_size)
         for limit in limits:
             base = {"scenario": scenario, "limit": limit.name, "column": limit.column,
-                    "threshold": limit.threshold_text(), "source": limit.source,
+                    "threshold": limit.threshold_text(), "rule": limit.threshold_text(),
+                    "category": limit.category, "source": limit.source,
                     "description": limit.description}
             if limit.column not in block.columns:
                 reason = f"not evaluated: column {limit.column} absent from the results"
@@ -349,6 +351,7 @@ def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
                 log.warning("scenario %s: %s", scenario, exc)
                 rows.append({**base, "status": f"not evaluated: {exc}"})
                 continue
+            base["threshold"] = applied_threshold_text(limit, thresholds)
             exceeded = block[limit.column].to_numpy(dtype=float) > thresholds
             est = _estimate(estimator, exceeded, weights)
             ok, reason = settings.criterion.judge(est)
@@ -393,7 +396,8 @@ def convergence_curve(extremes: pd.DataFrame, limit: Limit, context: LimitContex
                  half <= tol))
     curve.attrs.update(scenario=scenario, limit=limit.name, column=limit.column,
                        description=limit.description,
-                       threshold=limit.threshold_text(), method=settings.method,
+                       threshold=applied_threshold_text(limit, limit.thresholds(block, context)),
+                       method=settings.method,
                        confidence_level=settings.confidence_level)
     return curve
 

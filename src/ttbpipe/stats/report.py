@@ -45,6 +45,14 @@ def _list_table(header: list[str], rows: Iterable[list[str]], widths: list[int] 
     return "\n".join(lines) + "\n"
 
 
+def _exceedance_line(r, pct: str) -> str:
+    return (f"- scenario ``{r['scenario']}``: **{_escape(r['description'])}** > "
+            f"{_escape(r['threshold'])}: P = {_fmt_p(r['probability'])}, {pct} CI {_ci(r)} "
+            f"({int(r['n_exceed'])} of {int(r['n_samples'])} samples"
+            + (f", n_eff = {r['n_effective']:.1f}" if r.get("weighted") else "")
+            + f"; {_escape(r['source'])}).")
+
+
 def first_page_rst(assessment: pd.DataFrame, *, title: str = "Reliability summary",
                    study: str | None = None, intro: str | None = None) -> str:
     """reStructuredText summary of an :func:`~ttbpipe.stats.reliability.assess_limits` table.
@@ -66,19 +74,23 @@ def first_page_rst(assessment: pd.DataFrame, *, title: str = "Reliability summar
                "samples use an effective sample size). Details: docs/reliability.md.\n")
 
     out.append(_heading("Limits exceeded", "-"))
-    exceeded = evaluated[evaluated["n_exceed"] > 0] if len(evaluated) else evaluated
+    category = evaluated["category"] if "category" in evaluated else pd.Series("limit", evaluated.index)
+    limits_only = evaluated[category == "limit"]
+    exceeded = limits_only[limits_only["n_exceed"] > 0]
     if exceeded.empty:
-        out.append(f"No sample exceeded any evaluated limit ({len(evaluated)} limit-scenario "
+        out.append(f"No sample exceeded any evaluated limit ({len(limits_only)} limit-scenario "
                    "pairs).\n")
     else:
         for _, r in exceeded.sort_values(["scenario", "probability"],
-                                                ascending=[True, False]).iterrows():
-            out.append(f"- **{_escape(r['description'])}** > {_escape(r['threshold'])} "
-                       f"({_escape(r['source'])}), scenario ``{r['scenario']}``: "
-                       f"P = {_fmt_p(r['probability'])}, {pct} CI {_ci(r)} "
-                       f"({int(r['n_exceed'])} of {int(r['n_samples'])} samples"
-                       + (f", n_eff = {r['n_effective']:.1f}" if r.get("weighted") else "")
-                       + ").")
+                                         ascending=[True, False]).iterrows():
+            out.append(_exceedance_line(r, pct))
+        out.append("")
+    grades = evaluated[category == "grade"]
+    if not grades.empty:
+        out.append(_heading("Ride-quality grades", "-"))
+        out.append("Probability of exceeding a grade boundary (not a limit):\n")
+        for _, r in grades.iterrows():
+            out.append(_exceedance_line(r, pct))
         out.append("")
 
     out.append(_heading("Did the number of samples suffice?", "-"))

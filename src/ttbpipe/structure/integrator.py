@@ -13,6 +13,7 @@ from functools import lru_cache
 
 import numpy as np
 from numba import njit
+from scipy import sparse
 from scipy.sparse import linalg as splinalg
 
 from .kernels import (_add_rail_point_force, _structure_accelerations, _zhai_predict)
@@ -50,26 +51,45 @@ def zhai_critical_omega_dt(zeta: float) -> float:
     return lo
 
 
-def stable_time_step(model, safety: float = 0.9, n_modes: int = 12) -> dict:
+def _mass_inverse_sqrt(model, M):
+    """Sparse L^-1 with M_ff = L L^T on the free DOFs (diagonal part + dense span blocks)."""
+    free = ~model.fixed
+    nd = model.packed.n_diag
+    diag = M.diagonal()[:nd][free[:nd]]
+    blocks = [sparse.diags(1.0 / np.sqrt(diag))]
+    for o, red in zip(model.dof_info["span_dof0"], model.spans):
+        f = free[o:o + red.n]
+        if f.any():
+            L = np.linalg.cholesky(red.M[np.ix_(f, f)])
+            blocks.append(sparse.csr_matrix(np.linalg.inv(L)))
+    return sparse.block_diag(blocks).tocsr()
+
+
+def stable_time_step(model, safety: float = 0.9, n_modes: int = 6) -> dict:
     """Stability limit of Zhai's method for this structure.
 
-    The top ``n_modes`` eigenpairs of (K, M) (scipy ARPACK, shift-invert about a bound above the
-    spectrum would be slower here: M is block diagonal so plain 'LM' mode is cheap) give omega and
-    the modal damping ratio zeta = phi^T C phi / (2 omega); each mode allows
-    dt = Omega_crit(zeta) / omega. Returns the minimum times ``safety`` with its mode.
+    The top ``n_modes`` eigenpairs of (K, M), computed as the largest eigenvalues of the
+    standard form L^-1 K L^-T (M = L L^T, block-diagonal so L is cheap; ARPACK, ~0.05 s for
+    the reference structure), give omega and the modal damping ratio
+    zeta = x^T C x / (2 omega) with x = L^-T y; each mode allows dt = Omega_crit(zeta) / omega.
+    Returns the minimum times ``safety`` with its mode.
     """
     M, K, C = model.matrices()
     free = np.flatnonzero(~model.fixed)
-    M, K, C = (A[free][:, free].tocsc() for A in (M, K, C))
+    K, C = (A[free][:, free].tocsr() for A in (K, C))
+    Linv = _mass_inverse_sqrt(model, M)
+    A = (Linv @ K @ Linv.T).tocsr()
     k = min(n_modes, free.size - 2)
-    w2, vec = splinalg.eigsh(K, k=k, M=M, which="LM", tol=1e-8)
+    # loose tol: the top eigenvalues are clustered (identical rail bays), so tight vector
+    # convergence costs thousands of iterations; the eigenvalue error is ~tol^2 (symmetric)
+    w2, vec = splinalg.eigsh(A, k=k, which="LA", tol=1e-5)
     best = None
     for i in range(w2.size):
         w = np.sqrt(max(w2[i], 0.0))
         if w <= 0:
             continue
-        v = vec[:, i]
-        zeta = float(v @ (C @ v)) / (2 * w * float(v @ (M @ v)))
+        x = Linv.T @ vec[:, i]
+        zeta = float(x @ (C @ x)) / (2 * w)
         dt = zhai_critical_omega_dt(round(zeta, 6)) / w
         if best is None or dt < best["dt_limit_s"]:
             best = {"dt_limit_s": dt, "omega_rad_s": w, "frequency_hz": w / (2 * np.pi),

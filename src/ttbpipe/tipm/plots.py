@@ -20,18 +20,28 @@ def _figure(n_rows: int = 1, n_cols: int = 4, size=(15, 4)):
 
 
 def plot_psd_bands(population: PSDPopulation, selection: TIPMSelection, title: str = ""):
-    """Per channel: population percentile bands of the PSD ordinates and the representative sets."""
+    """Per channel: percentile bands of the sections' PSD ordinates against the weighted
+    percentiles of the representative sets, and both means."""
     fig, axes = _figure()
     f = population.frequency_per_m
     pct = np.percentile(population.psd_mm2_m, [5, 25, 50, 75, 95], axis=0)
+    order = np.argsort(selection.psd_mm2_m, axis=0)
+    cumulative = np.cumsum(selection.weights[order], axis=0)
+    sorted_sets = np.take_along_axis(selection.psd_mm2_m, order, axis=0)
+
+    def weighted_percentile(q: float) -> np.ndarray:
+        index = np.argmax(cumulative >= q - 1e-12, axis=0)
+        return np.take_along_axis(sorted_sets, index[None], axis=0)[0]
+
+    sets_lo, sets_mid, sets_hi = (weighted_percentile(q) for q in (0.05, 0.5, 0.95))
     for c, channel in enumerate(population.channels):
         ax = axes[0, c]
-        ax.fill_between(f, pct[0, :, c], pct[4, :, c], color="0.85", label="sections 5-95 %")
-        ax.fill_between(f, pct[1, :, c], pct[3, :, c], color="0.65", label="sections 25-75 %")
+        ax.fill_between(f, pct[0, :, c], pct[4, :, c], color="0.8", label="sections 5-95 %")
+        ax.fill_between(f, pct[1, :, c], pct[3, :, c], color="0.6", label="sections 25-75 %")
         ax.plot(f, pct[2, :, c], color="k", lw=1.0, label="sections median")
-        for j in range(selection.n_samples):
-            ax.plot(f, selection.psd_mm2_m[j, :, c], lw=0.5, alpha=0.6,
-                    label="representative sets" if j == 0 else None, color="tab:blue")
+        ax.plot(f, sets_lo[:, c], color="tab:blue", lw=0.6, label="sets 5 / 50 / 95 % (weighted)")
+        ax.plot(f, sets_mid[:, c], color="tab:blue", lw=0.6)
+        ax.plot(f, sets_hi[:, c], color="tab:blue", lw=0.6)
         ax.plot(f, population.psd_mm2_m[:, :, c].mean(axis=0), color="tab:red", lw=1.2,
                 label="population mean")
         ax.plot(f, selection.weighted_mean()[:, c], color="tab:orange", lw=1.0, ls="--",

@@ -30,10 +30,11 @@ docs/tipm.md states and justifies every choice made here. In short:
      Clark et al. 2004, J. Hydrometeorol. 5:243). The representative sets thus have the
      population's per-frequency marginal distribution and the rank dependence across channels
      and frequencies of M real sections. With ``match_variance`` the bin values are finally
-     spread, since the between-bin variance misses the within-bin part: a mean-preserving power transform v_j = c·b_j^γ (γ by bisection per ordinate)
-     then matches the per-frequency standard deviation exactly, keeps the mean, the order and
-     the positivity of the values (an affine stretch about the mean would push the lowest bins
-     of the χ²₂-like periodogram ordinates below zero).
+     spread, since the between-bin variance misses the within-bin part: a mean-preserving
+     exponential tilt v_j = c·b_j·exp(κ·b_j/max b) (κ by bisection per ordinate) matches the
+     per-frequency standard deviation exactly and keeps the mean, the order, the positivity and
+     the lower-tail shape of the values (an affine stretch about the mean would push the lowest
+     bins of the χ²₂-like periodogram ordinates below zero).
 
 Every weight is a probability: the weights sum to one.
 """
@@ -150,7 +151,7 @@ class TIPMSelector:
     method
         ``"copula"`` (default) or ``"sections"``; see the module docstring.
     match_variance
-        Copula method only: spread the bin values (power transform) so that the per-frequency
+        Copula method only: spread the bin values (exponential tilt) so that the per-frequency
         standard deviation equals the population's.
     max_sweeps
         Coordinate-search sweeps over the strata (step 2); it stops earlier when no stratum
@@ -228,36 +229,40 @@ class TIPMSelector:
 
     # -- step 3 -----------------------------------------------------------------------------
     @staticmethod
-    def _power_spread(bins: np.ndarray, mean: np.ndarray, sigma: np.ndarray,
-                      iterations: int = 60) -> np.ndarray:
-        """Mean-preserving power transform v_j = c·b_j^γ with std(v) = ``sigma``.
+    def _tilt_spread(bins: np.ndarray, mean: np.ndarray, sigma: np.ndarray,
+                     iterations: int = 60, max_tilt: float = 50.0) -> np.ndarray:
+        """Mean-preserving exponential tilt v_j = c·b_j·exp(κ·b_j/max_j b_j), std(v) = ``sigma``.
 
-        c = mean / mean_j(b_j^γ) keeps the (equally weighted) mean; the coefficient of variation
-        of b^γ increases monotonically with γ > 0, so γ is found by bisection on log γ in
-        [1/20, 20], per (frequency, channel). Values stay positive and keep their order.
+        The between-bin variance lacks the within-bin part, which sits mostly in the upper
+        tail (the top bin of a χ²₂-like ordinate); the tilt inflates the large values and
+        shrinks all values by the common factor c = mean / mean_j(b_j·exp(κ b_j/max b)), so the
+        equally weighted mean is kept, the values stay positive and ordered, and the lower tail
+        keeps its shape (relative change c, close to 1). The coefficient of variation grows
+        monotonically with κ >= 0, so κ is found by bisection in [0, ``max_tilt``] per
+        (frequency, channel); κ = 0 where the bins already carry the whole variance.
         """
         target_cov = sigma / mean
-        geometric = np.exp(np.log(bins).mean(axis=0))
-        x = bins / geometric                                  # scale-free, avoids overflow
+        x = bins / bins.max(axis=0)
 
-        def cov(gamma: np.ndarray) -> np.ndarray:
-            powered = x ** gamma
-            return powered.std(axis=0) / powered.mean(axis=0)
+        def cov(kappa: np.ndarray) -> np.ndarray:
+            tilted = x * np.exp(kappa * x)
+            return tilted.std(axis=0) / tilted.mean(axis=0)
 
-        lo = np.full(mean.shape, np.log(1 / 20)); hi = np.full(mean.shape, np.log(20.0))
+        lo = np.zeros(mean.shape)
+        hi = np.full(mean.shape, max_tilt)
         for _ in range(iterations):
             mid = 0.5 * (lo + hi)
-            too_small = cov(np.exp(mid)) < target_cov
+            too_small = cov(mid) < target_cov
             lo = np.where(too_small, mid, lo)
             hi = np.where(too_small, hi, mid)
-        gamma = np.exp(0.5 * (lo + hi))
-        unresolved = (np.abs(hi - np.log(20.0)) < 1e-6) | (np.abs(lo - np.log(1 / 20)) < 1e-6)
+        kappa = 0.5 * (lo + hi)
+        unresolved = hi > max_tilt * (1 - 1e-9)
         if unresolved.any():
-            log.warning("variance matching: exponent at its bound 1/20 or 20 at %d of %d "
-                        "(frequency, channel) ordinates; their std is not matched exactly",
+            log.warning("variance matching: tilt at its bound %g at %d of %d (frequency, channel) "
+                        "ordinates; their std stays below the population's", max_tilt,
                         int(unresolved.sum()), unresolved.size)
-        powered = x ** gamma
-        return powered * (mean / powered.mean(axis=0))
+        tilted = x * np.exp(kappa * x)
+        return tilted * (mean / tilted.mean(axis=0))
 
     def _copula_values(self, population: PSDPopulation, chosen: np.ndarray) -> np.ndarray:
         m = chosen.size
@@ -267,9 +272,9 @@ class TIPMSelector:
             sigma_pop = population.psd_mm2_m.std(axis=0)
             spread = bins.std(axis=0) > 0
             if spread.all():
-                bins = self._power_spread(bins, mean, sigma_pop)
+                bins = self._tilt_spread(bins, mean, sigma_pop)
             elif spread.any():
-                bins[:, spread] = self._power_spread(bins[:, spread], mean[spread], sigma_pop[spread])
+                bins[:, spread] = self._tilt_spread(bins[:, spread], mean[spread], sigma_pop[spread])
         selected = population.psd_mm2_m[chosen]
         ranks = np.argsort(np.argsort(selected, axis=0, kind="stable"), axis=0, kind="stable")
         return np.take_along_axis(bins, ranks, axis=0)

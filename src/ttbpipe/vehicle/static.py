@@ -3,8 +3,9 @@
 Vehicle: Newton iterations on R(q) = f_gravity + f_contact(q) - K q = 0, with the exact nonlinear
 contact law of the time loop (Hertz normal force, creep forces at zero velocities, flange) and a
 finite-difference contact Jacobian (the contact force of a wheelset depends only on that
-wheelset's DOFs, so 5 evaluations give the whole block-diagonal Jacobian). Wheelset spin DOFs
-have no static stiffness and are held at 0. Couplers are excluded (they are made stress-free in
+wheelset's DOFs, so 5 evaluations give the whole block-diagonal Jacobian). Wheelset spin angles
+have no stiffness (held at 0); their steady spin RATES are solved instead (zero creep moment
+about each axle: steady rolling). Couplers are excluded (they are made stress-free in
 the static state: the time loop adds the constant preload K_coupler q_static, which is the
 equivalent of adjusting the coupler heads to the static car heights).
 
@@ -29,19 +30,24 @@ log = logging.getLogger(__name__)
 
 
 def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.ndarray | None = None,
-                         tol_disp: float = 1e-11, max_iter: int = 60) -> tuple[np.ndarray, np.ndarray]:
-    """Static vehicle DOFs q (m, rad) and the per-wheel contact table on rails at ``rail_kin``.
+                         tol_disp: float = 1e-11, max_iter: int = 60
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Static (steady rolling) state: vehicle DOFs q (m, rad), velocities v and the wheel table.
 
     ``rail_kin`` (n_ws, 2, 4): rail-head z, dz/dt, y, dy/dt at each wheel (zeros: perfect rigid
-    track). Raises RuntimeError naming the remedy when Newton does not converge.
+    track). The unknowns are all DOFs except the wheelset spins, whose place is taken by the
+    steady spin-rate perturbations (v at the spin DOFs): steady rolling needs the longitudinal
+    creep moment about each axle to vanish (with rails deflected under load the rolling radii
+    change slightly). All other velocities are 0. Raises RuntimeError naming the remedy when
+    Newton does not converge.
     """
     n = model.n_dof
     n_ws = model.n_wheelsets
     if rail_kin is None:
         rail_kin = np.zeros((n_ws, 2, 4))
     k_susp = (model.stiffness - model.coupler_stiffness).tocsr()
-    free = np.ones(n, dtype=bool)
-    free[model.wheelset_dofs[:, PITCH]] = False
+    spin = np.zeros(n, dtype=bool)
+    spin[model.wheelset_dofs[:, PITCH]] = True
     # initial guess: the whole train sunk by the Hertz static penetration on its rails
     g = geom.hertz_g
     q = np.zeros(n)
@@ -50,39 +56,42 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
         ws = np.flatnonzero(model.wheelset_car == c)
         rail_z = rail_kin[ws, :, 0].mean()
         q[sl][1::DOF_PER_BODY] = rail_z - g * model.static_wheel_load[ws[0]] ** (2.0 / 3.0)
-    zero_v = np.zeros(n)
+    v = np.zeros(n)
     f_g = model.gravity_force
-    eps = 1e-7
+    eps_q, eps_v = 1e-7, 1e-5
+    step = np.full(n, np.inf)
     for it in range(max_iter):
-        f_c, wheel = contact_forces(q, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
+        f_c, wheel = contact_forces(q, v, model.wheelset_dofs, geom, speed, rail_kin)
         resid = f_g + f_c - k_susp @ q
         # block-diagonal contact Jacobian by finite differences, one wheelset DOF kind at a time
+        # (the spin column is the derivative with respect to the spin RATE)
         rows, cols, vals = [], [], []
         for k in range(5):
-            if k == PITCH:
-                continue
             dq = np.zeros(n)
-            dq[model.wheelset_dofs[:, k]] = eps
-            f_p, _ = contact_forces(q + dq, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
-            f_m, _ = contact_forces(q - dq, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
+            dv = np.zeros(n)
+            eps = eps_v if k == PITCH else eps_q
+            (dv if k == PITCH else dq)[model.wheelset_dofs[:, k]] = eps
+            f_p, _ = contact_forces(q + dq, v + dv, model.wheelset_dofs, geom, speed, rail_kin)
+            f_m, _ = contact_forces(q - dq, v - dv, model.wheelset_dofs, geom, speed, rail_kin)
             df = (f_p - f_m) / (2 * eps)
             for w in range(n_ws):
                 d = model.wheelset_dofs[w]
                 rows.append(d); cols.append(np.full(5, d[k])); vals.append(df[d])
         jac_c = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                               shape=(n, n)).tocsr()
-        jac = (k_susp - jac_c).tocsr()[free][:, free]
-        step = spla.spsolve(jac.tocsc(), resid[free])
+        jac = (k_susp - jac_c).tocsc()
+        step = spla.spsolve(jac, resid)
         if not np.all(np.isfinite(step)):
             raise RuntimeError("static equilibrium: singular Jacobian (a wheel without contact or "
                                "an unsupported body); check the suspension parameters and wheel loads")
-        q[free] += step
-        if np.max(np.abs(step)) < tol_disp:
-            f_c, wheel = contact_forces(q, zero_v, model.wheelset_dofs, geom, speed, rail_kin)
+        q[~spin] += step[~spin]
+        v[spin] += step[spin]
+        if np.max(np.abs(step[~spin])) < tol_disp and np.max(np.abs(step[spin])) < 1e-9:
+            f_c, wheel = contact_forces(q, v, model.wheelset_dofs, geom, speed, rail_kin)
             log.debug("vehicle static equilibrium in %d Newton iterations", it + 1)
-            return q, wheel
+            return q, wheel, v
     raise RuntimeError(f"static equilibrium: Newton did not converge in {max_iter} iterations "
-                       f"(last step {np.max(np.abs(step)):.3g} m); check the contact parameters "
+                       f"(last step {np.max(np.abs(step)):.3g}); check the contact parameters "
                        "(Hertz G, wheel loads) or raise max_iter")
 
 
