@@ -1,20 +1,20 @@
 """Time-step convergence of the coupled train-track-bridge loop (issue 4 requirement)."""
 
-import numpy as np
+import copy
+from pathlib import Path
+
 import pytest
 
+from ttbpipe.simulation.config import load_case
 from ttbpipe.simulation.coupled import run_coupled
+
+CASE = load_case(Path(__file__).resolve().parents[1] / "config" / "validation"
+                 / "vehicle_convergence.yaml")
 
 
 def _peaks(dt: float) -> tuple[float, float]:
-    case = {"train": {"composition": ["motor", "trailer"]},
-            "structure": {"layout": {"approach_length_m": 50.0, "spans_m": [32.0],
-                                     "approach_track": "rigid"}},
-            "simulation": {"track": "structure", "speed_kmh": 300.0, "time_step_s": dt,
-                           "output_interval_s": 1e-3},
-            "irregularity": {"source": "synthetic", "spectrum": "tbt3352", "seed": 11},
-            "monitors": [{"name": "deck", "kind": "girder", "span": 0, "position": 0.5,
-                          "directions": ["z"], "quantities": ["acceleration"]}]}
+    case = copy.deepcopy(CASE)
+    case["simulation"]["time_step_s"] = dt
     _, summary = run_coupled(case)
     return summary["max_wheel_load_N"], summary["monitor_peaks"]["deck_z_acc_m_s2"]
 

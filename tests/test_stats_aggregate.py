@@ -166,3 +166,17 @@ def test_max_std_table_from_histories(tmp_path):
     table = A.max_std_table(A.aggregate_histories(paths))
     x = _matrix(df, QUANTITIES[1], 120)
     assert table.loc[QUANTITIES[1], "C1"] == pytest.approx(x.std(axis=0, ddof=1).max(), rel=1e-10)
+
+
+def test_state_budget_and_moments_only(tmp_path):
+    """A histogram state above max_state_mb stops before allocation with the remedies named;
+    quantiles=() computes mean/std in one pass (equal to the two-pass result, exact)."""
+    paths, _ = _write_batches(tmp_path, [10, 10], n_points=500)
+    with pytest.raises(MemoryError, match="lower n_bins"):
+        A.aggregate_histories(paths, n_bins=256, max_state_mb=1.0)  # needs 2 x 500 x 256 x 8 = 2 MB
+    trace = A.AggregationTrace()
+    only = A.aggregate_histories(paths, quantiles=(), trace=trace)
+    full = A.aggregate_histories(paths)
+    assert trace.files_read == 2
+    key = ("C1", QUANTITIES[0])
+    np.testing.assert_array_equal(only[key].std, full[key].std)

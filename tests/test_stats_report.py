@@ -132,3 +132,12 @@ def test_stats_report_cli_end_to_end(tmp_path):
     assert "convergence_2024-01-15.png" in names
     assert set(io.read_table(out / "table1_std.parquet").columns) == {"index", "2024-01-15",
                                                                      "2024-07-15"}
+
+
+def test_first_page_when_nothing_can_be_evaluated():
+    """Only 'not evaluated' rows: the page says so instead of failing."""
+    ext = example_extremes(range(20), "C1").drop(columns=["train_speed_m_s"])
+    limits = [lim for lim in L.default_limits() if lim.name == "wheel_unloading_ratio"]
+    text = first_page_rst(assess_limits(ext, limits))
+    assert "No limit could be evaluated" in text and "train_speed_m_s" in text
+    assert _docutils_messages(text) == ""

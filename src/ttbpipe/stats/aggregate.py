@@ -287,6 +287,7 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
                         quantities: Sequence[str] | None = None,
                         quantiles: Sequence[float] = (0.05, 0.5, 0.95),
                         n_bins: int = 256, std_kind: str = "reliability",
+                        max_state_mb: float = 1024.0,
                         trace: AggregationTrace | None = None) -> dict[tuple[str, str], HistoryStatistics]:
     """Weighted mean, std and percentiles per scenario and quantity over time-history batch files.
 
@@ -294,6 +295,9 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
     :class:`WeightedMoments` (which also fixes the per-point histogram range), pass 2 the
     :class:`HistogramQuantiles`. Weights come from the ``weight`` column (TIPM probabilities).
     A sample seen twice, or a grid differing between files, is an error naming the file.
+    The histogram state is ``scenarios x quantities x points x n_bins x 8`` bytes; above
+    ``max_state_mb`` the call stops before allocating it and names the remedies (fewer bins,
+    fewer quantities per call). ``quantiles=()`` skips the histograms and the second pass.
     Returns ``{(scenario, quantity): HistoryStatistics}``.
     """
     paths = sorted(Path(p) for p in paths)
@@ -337,8 +341,15 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
                 moments[key].update(values[q], weights)
         del df
 
-    histograms = {key: HistogramQuantiles(m.minimum, m.maximum, n_bins) for key, m in moments.items()}
-    for path in paths:  # pass 2: histograms
+    state_mb = sum(m.n_points for m in moments.values()) * n_bins * 8 / 1e6
+    if quantiles and state_mb > max_state_mb:
+        raise MemoryError(
+            f"percentile histograms would take {state_mb:.0f} MB ({len(moments)} scenario-quantity "
+            f"pairs x {n_bins} bins) > max_state_mb = {max_state_mb:g}: lower n_bins (the percentile "
+            "error bound grows as 1/n_bins), pass fewer quantities per call, or raise max_state_mb")
+    histograms = ({key: HistogramQuantiles(m.minimum, m.maximum, n_bins)
+                   for key, m in moments.items()} if quantiles else {})
+    for path in (paths if quantiles else []):  # pass 2: histograms
         df = _read_batch(path, columns, trace, validate=False)
         for scenario, _, _, weights, values in _batch_matrices(df, path, abscissa, quantities):
             for q in quantities:
@@ -350,12 +361,14 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
     trace.samples = {s: int(v.size) for s, v in seen.items()}
     results = {}
     for (scenario, q), m in moments.items():
-        h = histograms[(scenario, q)]
-        qs = h.quantiles(quantiles)
+        h = histograms.get((scenario, q))
+        qs = h.quantiles(quantiles) if h is not None else np.empty((0, m.n_points))
         results[(scenario, q)] = HistoryStatistics(
             scenario=scenario, quantity=q, abscissa_name=abscissa, abscissa=grids[scenario],
-            mean=m.mean, std=m.std(std_kind), quantiles={float(p): qs[i] for i, p in enumerate(quantiles)},
-            bin_width=h.bin_width, minimum=m.minimum, maximum=m.maximum, n_samples=m.count,
+            mean=m.mean, std=m.std(std_kind),
+            quantiles={float(p): qs[i] for i, p in enumerate(quantiles)},
+            bin_width=h.bin_width if h is not None else np.full(m.n_points, np.nan),
+            minimum=m.minimum, maximum=m.maximum, n_samples=m.count,
             total_weight=m.total_weight, n_effective=m.n_effective, std_kind=std_kind)
     log.info("aggregated %d files, %s samples per scenario, state %.1f MB",
              len(paths), trace.samples, trace.state_nbytes / 1e6)

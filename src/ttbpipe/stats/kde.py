@@ -138,4 +138,11 @@ class ExtremeValueKDE:
             if self.upper is not None:
                 hi = min(hi, self.upper)
         x = np.linspace(lo, hi, n)
-        return x, self.pdf(x)
+        pdf = self.pdf(x)
+        # Trim far tails (the log transform's padding is long on the right), keeping the data.
+        keep = (pdf >= 1e-3 * pdf.max()) | ((x >= self.values.min()) & (x <= self.values.max()))
+        first, last = np.flatnonzero(keep)[[0, -1]]
+        if first > 0 or last < n - 1:
+            x = np.linspace(x[max(first - 1, 0)], x[min(last + 1, n - 1)], n)
+            pdf = self.pdf(x)
+        return x, pdf

@@ -76,6 +76,8 @@ def first_page_rst(assessment: pd.DataFrame, *, title: str = "Reliability summar
     out.append(_heading("Limits exceeded", "-"))
     category = evaluated["category"] if "category" in evaluated else pd.Series("limit", evaluated.index)
     limits_only = evaluated[category == "limit"]
+    if "n_exceed" not in limits_only:  # nothing could be evaluated
+        limits_only = limits_only.assign(n_exceed=pd.Series(dtype="int64"))
     exceeded = limits_only[limits_only["n_exceed"] > 0]
     if exceeded.empty:
         out.append(f"No sample exceeded any evaluated limit ({len(limits_only)} limit-scenario "

@@ -34,6 +34,7 @@ CARRIER_PARAMETERS: dict[str, tuple[str, ...]] = {
 PARAMETER_CARRIER = {p: kind for kind, ps in CARRIER_PARAMETERS.items() for p in ps}
 
 #: 3-point Gauss-Legendre rule on [0, 1]: (xi, weight)
+_AB_CSR_BALLAST = False
 GAUSS3 = ((0.5 - np.sqrt(0.15), 5 / 18), (0.5, 8 / 18), (0.5 + np.sqrt(0.15), 5 / 18))
 
 
@@ -46,6 +47,11 @@ class _Links:
         self.k: list[float] = []
         self.c: list[float] = []
         self.kind: list[str] = []
+        self.tri_dofs: list[np.ndarray] = []
+        self.tri_coefs: list[np.ndarray] = []
+        self.tri_k: list[list[float]] = []
+        self.tri_c: list[list[float]] = []
+        self.tri_kind: list[str] = []
 
     def add(self, dofs, coefs, k: float, c: float, kind: str) -> None:
         dofs = np.asarray(dofs, dtype=np.int64)
@@ -53,6 +59,32 @@ class _Links:
         keep = coefs != 0.0
         self.dofs.append(dofs[keep]); self.coefs.append(coefs[keep])
         self.k.append(float(k)); self.c.append(float(c)); self.kind.append(kind)
+
+    def add_triple(self, rows, k3, c3, kind: str) -> None:
+        """Three links (vertical, lateral, roll), each (dofs, coefs), over one shared DOF list."""
+        union: dict[int, int] = {}
+        for dofs, _ in rows:
+            for q in dofs:
+                union.setdefault(int(q), len(union))
+        coef = np.zeros((len(union), 3))
+        for r, (dofs, coefs) in enumerate(rows):
+            for q, c in zip(dofs, coefs):
+                coef[union[int(q)], r] += c
+        keep = np.any(coef != 0.0, axis=1)
+        self.tri_dofs.append(np.fromiter(union, dtype=np.int64)[keep])
+        self.tri_coefs.append(coef[keep])
+        self.tri_k.append([float(v) for v in k3]); self.tri_c.append([float(v) for v in c3])
+        self.tri_kind.append(kind)
+
+    def triple_arrays(self):
+        """(ptr, dof, coef (3 per dof, flattened), k (3 per triple), c (3 per triple))."""
+        ptr = np.zeros(len(self.tri_k) + 1, dtype=np.int64)
+        ptr[1:] = np.cumsum([d.size for d in self.tri_dofs])
+        if not self.tri_k:
+            return ptr, np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros(0)
+        return (ptr, np.concatenate(self.tri_dofs).astype(np.int64),
+                np.concatenate(self.tri_coefs).ravel(), np.array(self.tri_k, float).ravel(),
+                np.array(self.tri_c, float).ravel())
 
     def arrays(self):
         """CSR arrays in insertion order (sorting by term count measured no faster)."""
@@ -173,7 +205,8 @@ class StructureModel:
     slab_elements: np.ndarray        # (n, 2) x of slab element ends
     slab_element_node0: np.ndarray   # first DOF of node a of each slab element
     fixed: np.ndarray                # bool mask of fixed DOFs
-    link_kinds: list
+    link_kinds: list                 # kind of each CSR link (ballast, bearing, pier, ...)
+    triple_kinds: list = field(default_factory=list)   # "pad" | "ca" | "ballast" per triple
 
     @property
     def n_dof(self) -> int:
@@ -448,22 +481,30 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                     zd, zc = [rd], [1.0]
                     yd, yc = [rd + 2, rd + 4], [1.0, d_f]
                     rdofs, rc = [rd + 4], [1.0]
-                links.add(zd, zc, kz, cz, "pad_z")
-                links.add(yd, yc, ky, cy, "pad_y")
-                links.add(rdofs, rc, kz * bf2, cz * bf2, "pad_roll")
-        # ballast: sleeper -> two blocks, shear between blocks, blocks -> subgrade
+                links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)], (kz, ky, kz * bf2),
+                                 (cz, cy, cz * bf2), "pad")
+        # ballast: sleeper -> two blocks, shear between blocks, blocks -> subgrade; one triple
+        # per block (sleeper-block, block-subgrade, block-next block), a zero row at the end
         ns = ballasted_nodes.size
         for j in range(ns):
             sd = off["sleeper"] + 3 * j
             for side in range(2):
                 e_r = half_gauge if side == 0 else -half_gauge
                 bd = off["ballast"] + 2 * j + side
-                links.add([sd, sd + 2, bd], [1.0, e_r, -1.0], bal["ballast_kz_N_m"],
-                          bal["ballast_cz_Ns_m"], "ballast_z")
-                links.add([bd], [1.0], bal["subgrade_k_N_m"], bal["subgrade_c_Ns_m"], "subgrade")
-                if j + 1 < ns and ballasted_nodes[j + 1] == ballasted_nodes[j] + 1:
-                    links.add([bd, bd + 2], [1.0, -1.0], bal["shear_k_N_m"], bal["shear_c_Ns_m"],
-                              "ballast_shear")
+                has_next = j + 1 < ns and ballasted_nodes[j + 1] == ballasted_nodes[j] + 1
+                if _AB_CSR_BALLAST:
+                    links.add([sd, sd + 2, bd], [1.0, e_r, -1.0], bal["ballast_kz_N_m"], bal["ballast_cz_Ns_m"], "b")
+                    links.add([bd], [1.0], bal["subgrade_k_N_m"], bal["subgrade_c_Ns_m"], "s")
+                    if has_next:
+                        links.add([bd, bd + 2], [1.0, -1.0], bal["shear_k_N_m"], bal["shear_c_Ns_m"], "w")
+                    continue
+                links.add_triple(
+                    [([sd, sd + 2, bd], [1.0, e_r, -1.0]), ([bd], [1.0]),
+                     ([bd, bd + 2], [1.0, -1.0]) if has_next else ([], [])],
+                    (bal["ballast_kz_N_m"], bal["subgrade_k_N_m"],
+                     bal["shear_k_N_m"] if has_next else 0.0),
+                    (bal["ballast_cz_Ns_m"], bal["subgrade_c_Ns_m"],
+                     bal["shear_c_Ns_m"] if has_next else 0.0), "ballast")
             links.add([sd + 1], [1.0], bal["ballast_ky_N_m"], bal["ballast_cy_Ns_m"], "ballast_y")
         # CA mortar (bridge) or foundation (slab on subgrade), per slab element
         b2 = float(slab_c["width_m"]) ** 2 / 12.0
@@ -499,9 +540,9 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                     zd, zc = zd + idx, zc + list(-rz)
                     yd, yc = yd + idx, yc + list(-(ry - h_deck * rr))
                     rdofs, rc = rdofs + idx, rc + list(-rr)
-                links.add(zd, zc, kz * w, cz * w, "ca_z")
-                links.add(yd, yc, ky * w, cy * w, "ca_y")
-                links.add(rdofs, rc, kz * w * b2, cz * w * b2, "ca_roll")
+                links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)],
+                                 (kz * w, ky * w, kz * w * b2), (cz * w, cy * w, cz * w * b2),
+                                 "ca")
     # bearings: girder end (z, y, roll) -> pier (y, z, roll) or abutment (ground)
     if not brg["rigid"]:
         eb = 0.5 * float(brg["lateral_spacing_m"])
@@ -539,6 +580,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         mat0.append(pos); pos += red.n * red.n
         Kf.append(red.K.ravel()); Cf.append(red.C.ravel()); Mi.append(minv.ravel())
     ptr, ldof, lcoef, lk, lc = links.arrays()
+    tptr, tdof, tcoef, tk, tc = links.triple_arrays()
     cat = lambda parts, dt=float: (np.concatenate(parts).astype(dt) if parts  # noqa: E731
                                    else np.zeros(0, dtype=dt))
     packed = StructurePacked(
@@ -554,6 +596,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         n_rails=2 if has_track else 0, rail_x0=float(layout.rail_x[0]),
         rail_dx=float(layout.rail_x[1] - layout.rail_x[0]), rail_n_nodes=int(n_rn),
         rail_dof0=np.array([0, 5 * n_rn], dtype=np.int64),
+        tri_ptr=tptr, tri_dof=tdof, tri_coef=tcoef, tri_k=tk, tri_c=tc,
     )
     info = dict(off, n_diag=n_diag, n_dof=n_dof, span_dof0=span_dof0, n_piers=n_piers,
                 n_sleepers=int(ballasted_nodes.size), n_rail_nodes=n_rn,
@@ -562,7 +605,8 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
     return StructureModel(config=cfg, layout=layout, properties=dict(props), packed=packed,
                           spans=spans, dof_info=info, slab_elements=slab_x,
                           slab_element_node0=node_a, fixed=fixed,
-                          link_kinds=[links.kind[i] for i in links.order])
+                          link_kinds=[links.kind[i] for i in links.order],
+                          triple_kinds=list(links.tri_kind))
 
 
 def assemble_matrices(packed: StructurePacked):
@@ -598,6 +642,15 @@ def assemble_matrices(packed: StructurePacked):
         outer = np.outer(coef, coef).ravel()
         rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
         kv.append(packed.link_k[l] * outer); cv.append(packed.link_c[l] * outer)
+    # link triples: three links over one DOF list
+    for t in range(packed.tri_k.size // 3):
+        j0, j1 = packed.tri_ptr[t], packed.tri_ptr[t + 1]
+        dof = packed.tri_dof[j0:j1]
+        coef = packed.tri_coef[3 * j0:3 * j1].reshape(-1, 3)
+        kt = (coef * packed.tri_k[3 * t:3 * t + 3]) @ coef.T
+        ct = (coef * packed.tri_c[3 * t:3 * t + 3]) @ coef.T
+        rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
+        kv.append(kt.ravel()); cv.append(ct.ravel())
     # spans
     mrows, mcols, mv = [np.arange(packed.n_diag)], [np.arange(packed.n_diag)], []
     with np.errstate(divide="ignore"):

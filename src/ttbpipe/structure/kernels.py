@@ -6,9 +6,10 @@ element (no global matrix in the time loop):
 
 * beams (both rails and the slab): Hermite cubic bending in the vertical and lateral planes and
   linear torsion, per-element E*I and G*K (paper eqs. 12-13);
-* links: every discrete or lumped spring-damper (rail pads, CA mortar, sleepers and ballast,
-  bearings, piers) as a relative displacement d = sum_j coef_j u_{dof_j}, force k d + c d', and the
-  transposed scatter (paper eqs. 22-27 with the shape functions folded into coef);
+* links: every discrete or lumped spring-damper (sleepers and ballast, bearings, piers) as a
+  relative displacement d = sum_j coef_j u_{dof_j}, force k d + c d', and the transposed scatter
+  (paper eqs. 22-27 with the shape functions folded into coef); rail pads and CA quadrature points
+  as link *triples* (vertical, lateral, roll over one shared DOF list);
 * girder spans: a dense reduced block per span (Craig-Bampton boundary + fixed-interface modal
   coordinates) with its own K, Rayleigh C (eq. 18) and the inverse of its mass block.
 
@@ -29,7 +30,12 @@ StructurePacked = namedtuple("StructurePacked", [
     "link_ptr", "link_dof", "link_coef", "link_k", "link_c",
     "span_dof0", "span_n", "span_mat0", "span_K", "span_C", "span_Minv", "span_scratch",
     "n_rails", "rail_x0", "rail_dx", "rail_n_nodes", "rail_dof0",
+    "tri_ptr", "tri_dof", "tri_coef", "tri_k", "tri_c",
 ])
+# Link triples (added after the interface was published): default to none, so that code building
+# a StructurePacked by keyword without them (e.g. an empty rigid structure) keeps working.
+StructurePacked.__new__.__defaults__ = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64),
+                                        np.zeros(0), np.zeros(0), np.zeros(0))
 
 
 @njit(cache=True)
@@ -91,6 +97,47 @@ def _link_forces(packed, disp, vel, force):
 
 
 @njit(cache=True)
+def _triple_forces(packed, disp, vel, force):
+    """Subtract the forces of every link triple (rail pads, CA quadrature points).
+
+    A triple is three links (vertical, lateral, roll) over one shared DOF list: relative
+    displacements d_r = sum_j coef[j, r] u[dof_j] (r = 0, 1, 2), forces p_r = k_r d_r + c_r d'_r,
+    generalised forces sum_r coef[j, r] p_r subtracted. Same physics as three CSR links, one pass
+    over the DOFs (measured 1.5x faster for the pads).
+    """
+    n_tri = packed.tri_k.shape[0] // 3
+    for t in range(n_tri):
+        j0 = packed.tri_ptr[t]
+        j1 = packed.tri_ptr[t + 1]
+        d0 = 0.0
+        d1 = 0.0
+        d2 = 0.0
+        v0 = 0.0
+        v1 = 0.0
+        v2 = 0.0
+        for j in range(j0, j1):
+            q = packed.tri_dof[j]
+            u = disp[q]
+            w = vel[q]
+            c0 = packed.tri_coef[3 * j]
+            c1 = packed.tri_coef[3 * j + 1]
+            c2 = packed.tri_coef[3 * j + 2]
+            d0 += c0 * u
+            d1 += c1 * u
+            d2 += c2 * u
+            v0 += c0 * w
+            v1 += c1 * w
+            v2 += c2 * w
+        p0 = packed.tri_k[3 * t] * d0 + packed.tri_c[3 * t] * v0
+        p1 = packed.tri_k[3 * t + 1] * d1 + packed.tri_c[3 * t + 1] * v1
+        p2 = packed.tri_k[3 * t + 2] * d2 + packed.tri_c[3 * t + 2] * v2
+        for j in range(j0, j1):
+            force[packed.tri_dof[j]] -= (packed.tri_coef[3 * j] * p0
+                                         + packed.tri_coef[3 * j + 1] * p1
+                                         + packed.tri_coef[3 * j + 2] * p2)
+
+
+@njit(cache=True)
 def _structure_accelerations(packed, disp, vel, nodal_force, acc_out):
     """acc_out = M^-1 (nodal_force - K disp - C vel) for the whole structure.
 
@@ -102,6 +149,7 @@ def _structure_accelerations(packed, disp, vel, nodal_force, acc_out):
         acc_out[i] = nodal_force[i]
     _beam_forces(packed, disp, vel, acc_out)
     _link_forces(packed, disp, vel, acc_out)
+    _triple_forces(packed, disp, vel, acc_out)
     for i in range(packed.n_diag):
         acc_out[i] *= packed.inv_mass[i]
     tmp = packed.span_scratch
