@@ -3,8 +3,6 @@
 import copy
 from pathlib import Path
 
-import pytest
-
 from ttbpipe.simulation.config import load_case
 from ttbpipe.simulation.coupled import run_coupled
 
@@ -19,7 +17,6 @@ def _peaks(dt: float) -> tuple[float, float]:
     return summary["max_wheel_load_N"], summary["monitor_peaks"]["deck_z_acc_m_s2"]
 
 
-@pytest.mark.slow
 def test_halving_the_time_step_changes_peaks_by_less_than_2_percent():
     """Two cars at 300 km/h on TB/T 3352 irregularities over one 32 m span: halving dt from
     5e-5 s to 2.5e-5 s changes the peak wheel-rail vertical force (every step, every wheel) and

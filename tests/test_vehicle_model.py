@@ -125,3 +125,27 @@ def test_train_layout_and_static_loads():
     assert m.static_wheel_load[0] == pytest.approx(9.81 * (48000 / 8 + 3200 / 4 + 2400 / 2))
     # couplers present between 4 pairs of cars, acting in y and z
     assert m.coupler_stiffness.nnz > 0
+
+
+def test_coupler_acts_between_car_ends_in_y_and_z():
+    """Coupler element: a lateral shift of car 1's body loads car 1 and car 2 with -+k_y; a yaw of
+    car 1 moves its rear coupler head by -L/2 * yaw, so the coupler force is k_y L/2 per radian
+    and the yaw moment k_y (L/2)^2 (lever arithmetic, exact). Vertical likewise with pitch."""
+    train = TrainParameters(cars=[trailer_car(), trailer_car()])
+    m = build_train_model(train)
+    kc = m.coupler_stiffness
+    ky, kz, half = train.coupler.ky, train.coupler.kz, train.cars[0].car_length / 2
+    q = np.zeros(m.n_dof)
+    q[Y] = 1.0
+    f = kc @ q
+    assert f[Y] == pytest.approx(ky) and f[DOF_PER_CAR + Y] == pytest.approx(-ky)
+    q = np.zeros(m.n_dof)
+    q[YAW] = 1.0
+    f = kc @ q
+    assert f[DOF_PER_CAR + Y] == pytest.approx(ky * half)   # head moved to -y; elastic force -Kq on car 2 also -y
+    assert f[YAW] == pytest.approx(ky * half ** 2)
+    q = np.zeros(m.n_dof)
+    q[PITCH] = 1.0   # rear head (x = -L/2) moves up by +L/2
+    f = kc @ q
+    assert f[DOF_PER_CAR + Z] == pytest.approx(-kz * half)
+    assert f[PITCH] == pytest.approx(kz * half ** 2)

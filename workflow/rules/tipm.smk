@@ -20,39 +20,24 @@ def tipm_population_psds(wildcards) -> list[str]:
 
 
 rule tipm_select:
-    """Representative PSD sets with probability weights for one campaign's population."""
+    """Representative PSD sets with probability weights for one campaign's population, and
+    their space-domain profiles (one job per campaign: selection and profiles are cheap)."""
     input:
         tipm_population_psds,
     output:
         selection="results/tipm/selection/{date}.parquet",
         weights="results/tipm/selection/{date}.weights.parquet",
         metrics="results/tipm/selection/{date}.metrics.parquet",
-    params:
-        tipm=TIPM,
-        psd=config["psd"],
-        version=MODEL_VERSION,
-    log:
-        "logs/tipm/select/{date}.log",
-    script:
-        "../scripts/tipm_select.py"
-
-
-rule tipm_profiles:
-    """Space-domain irregularity profiles of one campaign's representative sets."""
-    input:
-        selection="results/tipm/selection/{date}.parquet",
-        weights="results/tipm/selection/{date}.weights.parquet",
-    output:
-        "results/tipm/profiles/{date}.parquet",
+        profiles="results/tipm/profiles/{date}.parquet",
     params:
         tipm=TIPM,
         psd=config["psd"],
         seed=config["study"]["seed"],
         version=MODEL_VERSION,
     log:
-        "logs/tipm/profiles/{date}.log",
+        "logs/tipm/select/{date}.log",
     script:
-        "../scripts/tipm_profiles.py"
+        "../scripts/tipm_select.py"
 
 
 rule tipm_distribution:

@@ -34,7 +34,6 @@ CARRIER_PARAMETERS: dict[str, tuple[str, ...]] = {
 PARAMETER_CARRIER = {p: kind for kind, ps in CARRIER_PARAMETERS.items() for p in ps}
 
 #: 3-point Gauss-Legendre rule on [0, 1]: (xi, weight)
-_AB_CSR_BALLAST = False
 GAUSS3 = ((0.5 - np.sqrt(0.15), 5 / 18), (0.5, 8 / 18), (0.5 + np.sqrt(0.15), 5 / 18))
 
 
@@ -492,12 +491,6 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                 e_r = half_gauge if side == 0 else -half_gauge
                 bd = off["ballast"] + 2 * j + side
                 has_next = j + 1 < ns and ballasted_nodes[j + 1] == ballasted_nodes[j] + 1
-                if _AB_CSR_BALLAST:
-                    links.add([sd, sd + 2, bd], [1.0, e_r, -1.0], bal["ballast_kz_N_m"], bal["ballast_cz_Ns_m"], "b")
-                    links.add([bd], [1.0], bal["subgrade_k_N_m"], bal["subgrade_c_Ns_m"], "s")
-                    if has_next:
-                        links.add([bd, bd + 2], [1.0, -1.0], bal["shear_k_N_m"], bal["shear_c_Ns_m"], "w")
-                    continue
                 links.add_triple(
                     [([sd, sd + 2, bd], [1.0, e_r, -1.0]), ([bd], [1.0]),
                      ([bd, bd + 2], [1.0, -1.0]) if has_next else ([], [])],

@@ -158,7 +158,7 @@ class TIPMSelector:
         changes.
     """
 
-    def __init__(self, fraction: float = 0.1, min_samples: int = 2, max_samples: int | None = None,
+    def __init__(self, fraction: float = 0.1, min_samples: int = 5, max_samples: int | None = None,
                  method: str = "copula", match_variance: bool = True, max_sweeps: int = 10):
         if not 0 < fraction <= 1:
             raise ValueError(f"tipm selection fraction must be in (0, 1], got {fraction}")
@@ -230,7 +230,7 @@ class TIPMSelector:
     # -- step 3 -----------------------------------------------------------------------------
     @staticmethod
     def _tilt_spread(bins: np.ndarray, mean: np.ndarray, sigma: np.ndarray,
-                     iterations: int = 60, max_tilt: float = 50.0) -> np.ndarray:
+                     iterations: int = 80, max_tilt: float = 300.0) -> np.ndarray:
         """Mean-preserving exponential tilt v_j = c·b_j·exp(κ·b_j/max_j b_j), std(v) = ``sigma``.
 
         The between-bin variance lacks the within-bin part, which sits mostly in the upper

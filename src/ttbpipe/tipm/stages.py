@@ -32,7 +32,7 @@ log = logging.getLogger(__name__)
 
 DEFAULTS: dict[str, Any] = {
     "population_campaigns": "all",
-    "selection": {"method": "copula", "fraction": 0.1, "min_samples": 2, "max_samples": 100,
+    "selection": {"method": "copula", "fraction": 0.1, "min_samples": 5, "max_samples": 100,
                   "match_variance": True},
     "profiles": {"length_m": 1000.0, "dx_m": 0.25},
     "evolution": {"n_partitions": 5, "partition_scale": "log", "min_partition_count": 10},
