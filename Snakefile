@@ -13,10 +13,15 @@ min_version("8.0")
 configfile: "config/config.yaml"
 
 
+report: "workflow/report/workflow.rst"
+
+
 include: "workflow/rules/common.smk"
 include: "workflow/rules/inspections.smk"
 include: "workflow/rules/tipm.smk"
 include: "workflow/rules/fields.smk"
+include: "workflow/rules/simulation.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:

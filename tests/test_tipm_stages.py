@@ -9,8 +9,8 @@ from ttbpipe.io import write_table
 from ttbpipe.irregularity.spectra import get_spectrum
 from ttbpipe.tipm import synthetic_population
 from ttbpipe.tipm.evolution import SpectralEvolution
-from ttbpipe.tipm.stages import (evolution_stage, forecast_stage, population_dates, profiles_stage,
-                                 select_stage, validation_stage)
+from ttbpipe.tipm.stages import (evolution_stage, forecast_base, forecast_stage, population_dates,
+                                 profiles_stage, select_stage, validation_stage)
 
 FREQ = np.arange(5, 501, 5) / 1000.0
 DATES = [f"2024-{m:02d}-15" for m in range(1, 9)]
@@ -88,11 +88,15 @@ def test_evolution_forecast_and_validation_run_end_to_end(psd_files):
     model = SpectralEvolution.from_table(table, meta)
     assert meta["interval_months"] == pytest.approx(1.0)
     selection, weights, _ = select_stage(psd_files, TIPM_CFG, PSD_CFG)
-    forecast, states, profiles = forecast_stage(model, selection, weights, DATES[-1], TIPM_CFG,
-                                                PSD_CFG, study_seed=7)
+    base = forecast_base(TIPM_CFG, PSD_CFG, psd_files[-1], selection, weights)
+    assert base.n_samples == 6 and np.allclose(base.weights, 1 / 6)      # latest campaign's sections
+    sets = forecast_base({**TIPM_CFG, "forecast": {**TIPM_CFG["forecast"], "base": "selection"}},
+                         PSD_CFG, psd_files[-1], selection, weights)
+    assert sets.n_samples == len(weights)
+    forecast, states, profiles = forecast_stage(model, base, DATES[-1], TIPM_CFG, PSD_CFG, study_seed=7)
     assert set(forecast["envelope"]) == {"fixed_p", "monte_carlo"}
     assert set(forecast["target_date"]) == {"2024-10-15", "2024-11-15"}
-    assert len(states) == 2 * 3 * len(weights)
+    assert len(states) == 2 * 3 * 6
     assert set(profiles["profile_index"]) == set(states["profile_index"])
     assert (forecast["psd_mm2_m"] > 0).all()
     # the upper envelope lies above the lower one at every ordinate (p is monotone)

@@ -89,4 +89,5 @@ def all_targets() -> list[str]:
     targets += expand("results/psd/{date}.parquet", date=CAMPAIGNS)
     targets.append("results/fields/samples.parquet")
     targets += tipm_targets()  # workflow/rules/tipm.smk
+    targets += study_targets()  # workflow/rules/report.smk
     return targets

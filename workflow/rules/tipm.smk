@@ -73,15 +73,21 @@ rule tipm_evolution:
 
 
 rule tipm_forecast:
-    """Forecast of the latest campaign's representative sets (eqs. 54, 56) and their profiles."""
+    """Forecast (eqs. 54, 56) of the latest campaign's sections (or TIPM sets) and profiles."""
     input:
         model="results/tipm/evolution.parquet",
         selection=f"results/tipm/selection/{TIPM_LAST}.parquet",
         weights=f"results/tipm/selection/{TIPM_LAST}.weights.parquet",
+        latest_psd=f"results/psd/{TIPM_LAST}.parquet",
     output:
         forecast="results/tipm/forecast.parquet",
         states="results/tipm/forecast_states.parquet",
         profiles="results/tipm/forecast_profiles.parquet",
+        figure=report(
+            "results/figures/tipm_forecast_spectra.png",
+            caption="../report/tipm_forecast_spectra.rst",
+            category="2. TIPM and spectral evolution",
+        ),
     params:
         tipm=TIPM,
         psd=config["psd"],

@@ -56,11 +56,12 @@ import pandas as pd
 from numba import njit
 
 from ..channels import rails_from_spectral
-from ..structure.kernels import (StructurePacked, _add_rail_point_force, _rail_point_kinematics,
+from ..structure.kernels import (StructurePacked, _add_rail_point_force,
+                                 _add_rail_point_force_at, _rail_point_kinematics_at,
                                  _structure_accelerations, _zhai_predict)
 from ..vehicle.comfort import sperling_index
 from ..vehicle.contact import N_COLS, ContactGeometry, build_geometry
-from ..vehicle.kernels import N_WHEEL_OUT, _csr_matvec_sub, _train_contact
+from ..vehicle.kernels import N_WHEEL_OUT, _csr_matvec_sub, _train_contact_relaxed
 from ..vehicle.model import (DOF_PER_CAR, PITCH, ROLL, YAW, Y, Z, TrainModel, build_train_model)
 from ..vehicle.parameters import TrainParameters, train_from_config
 from ..vehicle.static import StructureStatic, solve_vehicle_static
@@ -98,10 +99,15 @@ def _rail_kinematics(packed, disp, vel, ws_x, speed, head_height, irr, irr_slope
                      rail_kin):
     """Rail-head z, dz/dt, y, dy/dt at every wheel: structure (shear centre moved to the head
     by the roll, y_head = y - h roll) plus the irregularity of that rail (dz/dt = V dz/dx)."""
+    # rail geometry as scalars: passing ``packed`` per point costs ~0.3 us (docs/performance.md)
+    x0, dx, n_nodes = packed.rail_x0, packed.rail_dx, packed.rail_n_nodes
+    if packed.n_rails == 0:
+        n_nodes = 0
+    dof0 = packed.rail_dof0
     for w in range(ws_x.shape[0]):
         x = ws_x[w]
         for k in range(2):
-            z, vz, y, vy, r, vr = _rail_point_kinematics(packed, k, x, disp, vel)
+            z, vz, y, vy, r, vr = _rail_point_kinematics_at(x0, dx, n_nodes, dof0[k], x, disp, vel)
             zi, dzi = _irregularity_at(irr, irr_slope, irr_x0, irr_dx, k, x)
             yi, dyi = _irregularity_at(irr, irr_slope, irr_x0, irr_dx, 2 + k, x)
             rail_kin[w, k, 0] = z + zi
@@ -113,26 +119,35 @@ def _rail_kinematics(packed, disp, vel, ws_x, speed, head_height, irr, irr_slope
 @njit(cache=True)
 def _evaluate(t, q, v, a, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, c_val, f_const,
               ws_dofs, ws_x0, speed, table, scal, head_height, irr, irr_slope, irr_x0, irr_dx,
-              packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh, wheel, row, tmp):
-    """Accelerations of vehicle and structure at time t for the current (q, v, disp, vel)."""
+              packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh, wheel, row, tmp,
+              creep_state, creep_relax):
+    """Accelerations of vehicle and structure at time t for the current (q, v, disp, vel).
+
+    ``creep_state``/``creep_relax``: semi-implicit lateral creep (vehicle.kernels).
+    """
     for w in range(ws_x.shape[0]):
         ws_x[w] = ws_x0[w] + speed * t
     _rail_kinematics(packed, disp, vel, ws_x, speed, head_height, irr, irr_slope, irr_x0, irr_dx,
                      rail_kin)
     for i in range(f_veh.shape[0]):
         f_veh[i] = f_const[i]
-    _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, f_veh, wheel, row, tmp)
+    _train_contact_relaxed(q, v, ws_dofs, table, scal, speed, rail_kin, f_veh, wheel, row, tmp,
+                           creep_state, creep_relax)
     _csr_matvec_sub(k_ptr, k_idx, k_val, q, f_veh)
     _csr_matvec_sub(c_ptr, c_idx, c_val, v, f_veh)
     for i in range(f_veh.shape[0]):
         a[i] = f_veh[i] * inv_mass[i]
     for i in range(nodal_force.shape[0]):
         nodal_force[i] = 0.0
+    x0, dx, n_nodes = packed.rail_x0, packed.rail_dx, packed.rail_n_nodes
+    if packed.n_rails == 0:
+        n_nodes = 0
+    dof0 = packed.rail_dof0
     for w in range(ws_x.shape[0]):
         for k in range(2):
             fy_rail = -wheel[w, k, 1]
-            _add_rail_point_force(packed, k, ws_x[w], -wheel[w, k, 2], fy_rail,
-                                  -head_height * fy_rail, nodal_force)
+            _add_rail_point_force_at(x0, dx, n_nodes, dof0[k], ws_x[w], -wheel[w, k, 2], fy_rail,
+                                     -head_height * fy_rail, nodal_force)
     _structure_accelerations(packed, disp, vel, nodal_force, acc)
 
 
@@ -143,7 +158,8 @@ def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, 
                   packed, disp, vel, acc, acc_prev,
                   mon_ptr, mon_dof, mon_coef, mon_qty, mon_scale,
                   dt, n_steps, out_every,
-                  t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak):
+                  t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak,
+                  creep_relax=0.0):
     """Zhai explicit integration of vehicle + structure; returns (status, step).
 
     Outputs every ``out_every`` steps (row 0 = t 0): wheel_hist[row, ws, side] = (F_x, F_y, F_z,
@@ -151,6 +167,8 @@ def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, 
     Peaks over every step: wheel_peak[ws, side] = (max F_z, min F_z, max |F_y|, max |F_y|/F_z),
     h_peak[ws] = max |F_y,left + F_y,right|, mon_peak[m] = max |monitor|.
     Status 0 ok, 1 non-finite, 2 all wheels off the rail, 3 vehicle divergence.
+    ``creep_relax`` > 0: semi-implicit lateral creep (its state starts from the explicit law at
+    t = 0).
     """
     n_ws = ws_dofs.shape[0]
     n_v = q.shape[0]
@@ -161,10 +179,12 @@ def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, 
     row = np.zeros(N_COLS)
     tmp = np.zeros(N_WHEEL_OUT)
     nodal_force = np.zeros(disp.shape[0])
+    creep_state = np.zeros((n_ws, 2))
     n_mon = mon_ptr.shape[0] - 1
     _evaluate(0.0, q, v, a, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, c_val, f_const,
               ws_dofs, ws_x0, speed, table, scal, head_height, irr, irr_slope, irr_x0, irr_dx,
-              packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh, wheel, row, tmp)
+              packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh, wheel, row, tmp,
+              creep_state, 0.0)
     out_row = 0
     for n in range(-1, n_steps):
         if n >= 0:
@@ -178,7 +198,7 @@ def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, 
             _evaluate((n + 1) * dt, q, v, a, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, c_val,
                       f_const, ws_dofs, ws_x0, speed, table, scal, head_height, irr, irr_slope,
                       irr_x0, irr_dx, packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh,
-                      wheel, row, tmp)
+                      wheel, row, tmp, creep_state, creep_relax)
         # peaks at every step
         in_contact = 0
         for w in range(n_ws):
@@ -358,7 +378,8 @@ def contact_time_step_limit(model: TrainModel, geom: ContactGeometry, speed: flo
     dt_lat = 0.9 * 2.0 / (f22 / speed * inv_lat)
     return {"dt_s": float(min(dt_hertz, dt_spin, dt_lat)), "dt_hertz_s": float(dt_hertz),
             "dt_creep_spin_s": float(dt_spin), "dt_creep_lateral_s": float(dt_lat),
-            "hertz_stiffness_N_m": float(k_h)}
+            "hertz_stiffness_N_m": float(k_h),
+            "lateral_creep_inverse_mass_1_kg": float(inv_lat)}
 
 
 def rail_inverse_masses(packed, head_height: float) -> tuple[float, float]:
@@ -406,6 +427,7 @@ class CoupledSetup:
     static_wheel: np.ndarray   # (n_ws, 2, 7) contact table of the static state
     dt_limits: dict
     static_iterations: int
+    creep_relax: float = 0.0   # semi-implicit lateral creep: m_eff^-1 dt / V (0: explicit)
 
 
 def _rail_kin_at(packed, disp, ws_x, head_height, irr: Irregularity) -> np.ndarray:
@@ -501,6 +523,15 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
     if x_end <= x_lead0:
         raise ValueError(f"simulation: end_x_m {x_end} must exceed start_x_m {x_lead0}")
     limits = contact_time_step_limit(model, geom, speed, *rail_inv)
+    lateral_creep = sim.get("lateral_creep", "semi_implicit")
+    if lateral_creep not in ("semi_implicit", "explicit"):
+        raise ValueError(f"simulation.lateral_creep: {lateral_creep!r}; expected semi_implicit | "
+                         "explicit")
+    limits["lateral_creep"] = lateral_creep
+    if lateral_creep == "semi_implicit":
+        # the lateral creep damper is integrated semi-implicitly (unconditionally stable;
+        # docs/performance.md): only the Hertz and spin limits bound the step
+        limits["dt_s"] = float(min(limits["dt_hertz_s"], limits["dt_creep_spin_s"]))
     dt_setting = sim.get("time_step_s", 1.0e-4)
     if dt_setting == "auto":
         dt = limits["dt_s"]
@@ -514,9 +545,11 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
     if dt > limits["dt_s"]:
         raise ValueError(f"simulation.time_step_s={dt:g} s exceeds the wheel-rail contact stability "
                          f"limit {limits['dt_s']:.3g} s (Hertz {limits['dt_hertz_s']:.3g} s, creep "
-                         f"{min(limits['dt_creep_spin_s'], limits['dt_creep_lateral_s']):.3g} s); "
+                         f"{limits['dt_creep_spin_s']:.3g} s spin, "
+                         f"{limits['dt_creep_lateral_s']:.3g} s lateral, {lateral_creep}); "
                          "reduce simulation.time_step_s (creep damping grows as 1/V: low speeds "
-                         "need smaller steps)")
+                         "need smaller steps; simulation.lateral_creep: semi_implicit removes "
+                         "the lateral creep limit)")
     if sim.get("output_every") is not None:
         out_every = int(sim["output_every"])
     else:
@@ -530,11 +563,13 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
     q0, v0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, packed, sstatic, head_height,
                                                   irr, ws_x)
     f_const = model.gravity_force + model.coupler_stiffness @ q0
+    creep_relax = (limits["lateral_creep_inverse_mass_1_kg"] * dt / speed
+                   if lateral_creep == "semi_implicit" else 0.0)
     return CoupledSetup(train=train, model=model, geom=geom, speed=speed, dt=dt, n_steps=n_steps,
                         out_every=out_every, x_lead0=x_lead0, irregularity=irr, structure=structure,
                         packed=packed, head_height=head_height, monitors=monitors, q0=q0, v0=v0,
                         disp0=disp0, f_const=f_const, static_wheel=wheel0, dt_limits=limits,
-                        static_iterations=iters)
+                        static_iterations=iters, creep_relax=creep_relax)
 
 
 @dataclass
@@ -593,7 +628,8 @@ def integrate(setup: CoupledSetup) -> RawResult:
         setup.packed, disp, vel, acc, acc_prev,
         mon_ptr, mon_dof, mon_coef, mon_qty, mon_scale,
         setup.dt, setup.n_steps, setup.out_every,
-        t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak)
+        t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak,
+        setup.creep_relax)
     wall = time.perf_counter() - t0
     if status != 0:
         raise RuntimeError(f"coupled simulation stopped at t = {(step + 1) * setup.dt:.4f} s: "

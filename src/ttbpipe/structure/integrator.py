@@ -16,7 +16,8 @@ from numba import njit
 from scipy import sparse
 from scipy.sparse import linalg as splinalg
 
-from .kernels import (_add_rail_point_force, _structure_accelerations, _zhai_predict)
+from .kernels import (_add_rail_point_force_at, _structure_accelerations,
+                      _zhai_predict)
 
 log = logging.getLogger(__name__)
 
@@ -129,6 +130,10 @@ def _run_moving_loads(packed, load_rail, load_x0, load_v, load_F0, load_F1, load
     n_loads = load_rail.shape[0]
     n_mon = mon_qty.shape[0]
     n_extra = extra_dofs.shape[0]
+    rail_x0, rail_dx, rail_n_nodes = packed.rail_x0, packed.rail_dx, packed.rail_n_nodes
+    if packed.n_rails == 0:
+        rail_n_nodes = 0
+    rail_dof0 = packed.rail_dof0
     row = 0
     for step in range(n_steps + 1):
         t = step * dt
@@ -142,9 +147,11 @@ def _run_moving_loads(packed, load_rail, load_x0, load_v, load_F0, load_F1, load
         for i in range(n_loads):
             x = load_x0[i] + load_v[i] * t
             s = np.sin(2.0 * np.pi * load_freq[i] * t + load_phase[i])
-            _add_rail_point_force(packed, load_rail[i], x, load_F0[i, 0] + load_F1[i, 0] * s,
-                                  load_F0[i, 1] + load_F1[i, 1] * s,
-                                  load_F0[i, 2] + load_F1[i, 2] * s, nodal_force)
+            # scalar-geometry form: no StructurePacked pass per load (docs/performance.md)
+            _add_rail_point_force_at(rail_x0, rail_dx, rail_n_nodes, rail_dof0[load_rail[i]], x,
+                                     load_F0[i, 0] + load_F1[i, 0] * s,
+                                     load_F0[i, 1] + load_F1[i, 1] * s,
+                                     load_F0[i, 2] + load_F1[i, 2] * s, nodal_force)
         if n_extra > 0:
             for j in range(n_extra):
                 nodal_force[extra_dofs[j]] += extra_force[step, j]

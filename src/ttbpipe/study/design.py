@@ -4,7 +4,9 @@ A sample is the pair (scenario, sample_index). Scenarios come from ``study.scena
 configuration:
 
 * ``irregularity``: the TIPM representative irregularity sets of the latest campaign (their
-  probability weights, nominal parameters); scenario label = the campaign date;
+  probability weights, nominal parameters); scenario label = the campaign date; with
+  ``single_excitation``, also one run on the single mean-spectrum irregularity (label ``single``,
+  the paper's "single excitation" of Figs. 15-16);
 * ``forecast``: the forecast states of those sets at each horizon, at one cumulative-probability
   level (eq. 56); scenario label = the forecast's target date, weights = the TIPM weights;
 * ``fields``: random-field samples of the parameter groups (KLE), one scenario per randomness
@@ -35,14 +37,16 @@ log = logging.getLogger(__name__)
 STREAM_ID = 7
 
 SCENARIO_KINDS = ("irregularity", "forecast", "fields")
+#: Label of the single-excitation scenario (one run, mean-spectrum irregularity, nominal parameters).
+SINGLE = "single"
 FIELD_CONDITIONS = ("C1", "C2", "C3", "C4", "all")
 DESIGN_COLUMNS = ("scenario", "kind", "sample_index", "weight", "profile_index", "condition",
                   "seed_entropy")
 
 DEFAULT_SCENARIOS: dict[str, dict[str, Any]] = {
-    "irregularity": {"enabled": True},
-    "forecast": {"enabled": True, "level": 0.5},
-    "fields": {"enabled": True, "conditions": ["C1", "C2", "C3", "C4"], "samples": 8},
+    "irregularity": {"enabled": True, "single_excitation": True},
+    "forecast": {"enabled": True, "level": 0.5, "horizons_months": None},
+    "fields": {"enabled": True, "conditions": ["C1", "C2", "C3", "C4"], "samples": 6},
 }
 
 
@@ -83,11 +87,20 @@ def scenario_labels(study: Mapping[str, Any], latest_campaign: str,
                     horizons_months: Iterable[float]) -> dict[str, list[str]]:
     """Scenario labels per kind, known from the configuration alone (no data needed)."""
     sc = resolve_scenarios(study)
-    out: dict[str, list[str]] = {k: [] for k in SCENARIO_KINDS}
+    out: dict[str, list[str]] = {k: [] for k in (*SCENARIO_KINDS, SINGLE)}
     if sc["irregularity"]["enabled"]:
         out["irregularity"] = [latest_campaign]
+        if sc["irregularity"].get("single_excitation", True):
+            out[SINGLE] = [SINGLE]
     if sc["forecast"]["enabled"]:
-        out["forecast"] = sorted({add_months(latest_campaign, h) for h in horizons_months})
+        available = [float(h) for h in horizons_months]
+        chosen = sc["forecast"].get("horizons_months")
+        chosen = available if chosen is None else [float(h) for h in chosen]
+        bad = [h for h in chosen if h not in available]
+        if bad:
+            raise ValueError(f"study.scenarios.forecast.horizons_months {bad} are not forecast by "
+                             f"the TIPM (tipm.forecast.horizons_months = {available})")
+        out["forecast"] = sorted({add_months(latest_campaign, h) for h in chosen})
     if sc["fields"]["enabled"]:
         conditions = list(sc["fields"]["conditions"])
         bad = [c for c in conditions if c not in FIELD_CONDITIONS]
@@ -133,6 +146,8 @@ def build_design(study: Mapping[str, Any], *, latest_campaign: str,
         w = tipm_weights.sort_values("sample_index")
         blocks.append(_rows(latest_campaign, "irregularity", w["sample_index"], w["weight"],
                             w["sample_index"], "nominal", seed))
+    if labels[SINGLE]:
+        blocks.append(_rows(SINGLE, SINGLE, [0], [1.0], [-1], "nominal", seed))
     if labels["forecast"]:
         if forecast_states is None:
             raise ValueError("scenario forecast needs results/tipm/forecast_states.parquet")
@@ -146,7 +161,7 @@ def build_design(study: Mapping[str, Any], *, latest_campaign: str,
                                  f"tipm.forecast.levels {sorted(forecast_states['level'].unique())}")
             blocks.append(_rows(target, "forecast", block["sample_index"], block["weight"],
                                 block["profile_index"], "nominal", seed))
-    n_fields = int(sc["fields"].get("samples", 8))
+    n_fields = int(sc["fields"].get("samples", 6))
     for condition in labels["fields"]:
         if n_fields < 1:
             raise ValueError(f"study.scenarios.fields.samples must be >= 1, got {n_fields}")

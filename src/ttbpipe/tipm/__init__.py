@@ -7,14 +7,16 @@
   (:class:`TIPMSelector`);
 * :mod:`.evolution`    -- spectral evolution between campaigns, eqs. 50-56
   (:class:`SpectralEvolution`);
-* :mod:`.profiles`     -- time-domain (space-domain) profiles of representative and forecast sets;
+* :mod:`.profiles`     -- space-domain profiles of representative and forecast sets (seeded);
+* :mod:`.stages`       -- what the workflow scripts call (workflow/rules/tipm.smk);
 * :mod:`.plots`        -- figures.
 
 Design and validation: docs/tipm.md.
 """
 
+from .evolution import SpectralEvolution, forecast_coverage
 from .population import PSDPopulation, synthetic_population
 from .selection import TIPMSelection, TIPMSelector, selection_metrics
 
 __all__ = ["PSDPopulation", "synthetic_population", "TIPMSelection", "TIPMSelector",
-           "selection_metrics"]
+           "selection_metrics", "SpectralEvolution", "forecast_coverage"]

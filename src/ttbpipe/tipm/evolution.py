@@ -282,45 +282,67 @@ class SpectralEvolution:
         return state
 
     def simulate(self, state: np.ndarray, n_steps: int, n_paths: int,
-                 rng: np.random.Generator) -> Iterator[np.ndarray]:
+                 rng: np.random.Generator, p_draws: np.ndarray | None = None) -> Iterator[np.ndarray]:
         """Monte Carlo paths of eq. 54: yields the (n_paths, *state.shape) state after each step.
 
         p ~ U(0, 1) independently per path, step and leading index of ``state`` (e.g. section or
-        representative sample), shared by its frequencies and channels. States are yielded one
-        step at a time so that long horizons need no memory for the whole path history.
+        representative sample), shared by its frequencies and channels; ``p_draws`` (n_steps,
+        n_paths, *state.shape[:-2]) overrides the draws. States are yielded one step at a time so
+        that long horizons need no memory for the whole path history.
         """
         state = np.broadcast_to(np.asarray(state, float), (n_paths,) + np.shape(state)).copy()
         hits = 0
-        for _ in range(int(n_steps)):
-            p = rng.uniform(size=state.shape[:-2])
+        for s in range(int(n_steps)):
+            p = rng.uniform(size=state.shape[:-2]) if p_draws is None else p_draws[s]
             state, h = self.step(state, p)
             hits += h
             yield state
         if hits:
-            log.info("Monte Carlo forecast: %d of %d ordinate-steps floored at the smallest observed "
-                     "PSD", hits, int(n_steps) * state.size)
+            log.debug("Monte Carlo forecast: %d of %d ordinate-steps floored at the smallest "
+                      "observed PSD", hits, int(n_steps) * state.size)
 
     def envelope(self, state: np.ndarray, n_steps: int, levels: Sequence[float], n_paths: int,
                  rng: np.random.Generator, delta_n_per_m: float | None = None,
-                 at_steps: Sequence[int] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+                 at_steps: Sequence[int] | None = None, max_elements: int = 4_000_000
+                 ) -> tuple[np.ndarray, np.ndarray | None]:
         """Percentiles (``levels`` in (0, 1)) of the simulated paths after steps ``at_steps``
         (1-based; default every step 1..n_steps).
 
+        ``state`` is (n_items, F, C) (sections or representative sets). Items are independent
+        (their own p draws, all drawn from ``rng`` up front), so they are simulated in chunks of
+        at most ``max_elements`` path ordinates without changing the result.
         Returns (psd (len(at_steps), len(levels), *state.shape), tqi) where ``tqi``
-        (len(at_steps), len(levels), *state.shape[:-2], C) are the percentiles of the paths'
-        equivalent TQI sqrt(Σ S Δn) (mm) when ``delta_n_per_m`` is given, else None.
+        (len(at_steps), len(levels), n_items, C) are the percentiles of the paths' equivalent TQI
+        sqrt(Σ S Δn) (mm) when ``delta_n_per_m`` is given, else None.
         """
+        state = np.asarray(state, float)
+        if state.ndim != 3:
+            raise ValueError(f"envelope expects a (items, frequencies, channels) state, got {state.shape}")
         levels = np.asarray(levels, float)
-        wanted = set(range(1, int(n_steps) + 1) if at_steps is None else (int(s) for s in at_steps))
-        psd_out, tqi_out = [], []
-        for step, paths in enumerate(self.simulate(state, n_steps, n_paths, rng), start=1):
-            if step not in wanted:
-                continue
-            psd_out.append(np.quantile(paths, levels, axis=0))
-            if delta_n_per_m is not None:
-                tqi = np.sqrt(paths.sum(axis=-2) * delta_n_per_m)
-                tqi_out.append(np.quantile(tqi, levels, axis=0))
-        return np.stack(psd_out), (np.stack(tqi_out) if delta_n_per_m is not None else None)
+        wanted = sorted(set(range(1, int(n_steps) + 1) if at_steps is None else (int(s) for s in at_steps)))
+        n_items, n_f, n_c = state.shape
+        p_all = rng.uniform(size=(int(n_steps), n_paths, n_items))
+        psd_out = np.empty((len(wanted), levels.size) + state.shape)
+        tqi_out = np.empty((len(wanted), levels.size, n_items, n_c))
+        chunk = max(1, int(max_elements // (n_paths * n_f * n_c)))
+        hits_total = 0
+        for lo in range(0, n_items, chunk):
+            hi = min(n_items, lo + chunk)
+            k = 0
+            for step, paths in enumerate(self.simulate(state[lo:hi], n_steps, n_paths, rng,
+                                                       p_draws=p_all[:, :, lo:hi]), start=1):
+                hits_total += int(np.sum(paths == self.fitted.floor))
+                if step not in wanted:
+                    continue
+                psd_out[k, :, lo:hi] = np.quantile(paths, levels, axis=0)
+                if delta_n_per_m is not None:
+                    tqi_out[k, :, lo:hi] = np.quantile(np.sqrt(paths.sum(axis=-2) * delta_n_per_m),
+                                                       levels, axis=0)
+                k += 1
+        if hits_total:
+            log.info("Monte Carlo forecast: %.2g %% of the path ordinate-steps sit on the floor P_l "
+                     "(smallest observed PSD)", 100.0 * hits_total / (int(n_steps) * n_paths * state.size))
+        return psd_out, (tqi_out if delta_n_per_m is not None else None)
 
     # -- storage -------------------------------------------------------------------------------
     def to_table(self) -> pd.DataFrame:

@@ -8,7 +8,7 @@ import pandas as pd
 from .population import PSDPopulation
 from .selection import TIPMSelection
 
-__all__ = ["plot_psd_bands", "plot_selection_fidelity", "plot_forecast"]
+__all__ = ["plot_psd_bands", "plot_selection_fidelity", "plot_forecast", "plot_forecast_spectra"]
 
 
 def _figure(n_rows: int = 1, n_cols: int = 4, size=(15, 4)):
@@ -128,4 +128,51 @@ def plot_forecast(tqi: pd.DataFrame, coverage: pd.DataFrame, title: str = ""):
             ax.set_ylabel("section band RMS σ (mm)")
     fig.suptitle(title or "observed (lines) and forecast band RMS: Monte Carlo band (shaded), "
                  "fixed-p envelope (dashed)")
+    return fig
+
+
+def _band_average(frequency: np.ndarray, values: np.ndarray, n_bands: int = 40):
+    """Display smoothing: mean of the ordinates in ``n_bands`` log-spaced frequency bands."""
+    edges = np.geomspace(frequency.min(), frequency.max() * (1 + 1e-9), n_bands + 1)
+    index = np.digitize(frequency, edges) - 1
+    keep = [b for b in range(n_bands) if np.any(index == b)]
+    centres = np.array([np.exp(np.log(frequency[index == b]).mean()) for b in keep])
+    averaged = np.stack([values[index == b].mean(axis=0) for b in keep])
+    return centres, averaged
+
+
+def plot_forecast_spectra(forecast: pd.DataFrame, selection: TIPMSelection, base_date: str = ""):
+    """Per channel: probability-weighted mean PSD of the latest campaign's representative sets
+    and of their forecasts (eq. 56, fixed p) at each horizon: p = 0.5 line, p = 0.05-0.95 band.
+    Ordinates averaged in 40 log-spaced frequency bands for legibility."""
+    fig, axes = _figure(1, 4, (16, 4.5))
+    f = selection.frequency_per_m
+    fixed = forecast[forecast["envelope"] == "fixed_p"]
+    weighted = (fixed.assign(w=fixed["weight"] * fixed["psd_mm2_m"])
+                .groupby(["horizon_months", "level", "channel", "spatial_frequency_per_m"])["w"].sum())
+    horizons = sorted(fixed["horizon_months"].unique())
+    levels = sorted(fixed["level"].unique())
+    base_mean = selection.weighted_mean()
+    for c, channel in enumerate(selection.channels):
+        ax = axes[0, c]
+        x, y = _band_average(f, base_mean[:, c])
+        ax.plot(x, y, color="k", lw=1.5, label=f"sets {base_date}".strip())
+        for i, h in enumerate(horizons):
+            curves = {p: weighted.loc[(h, p, channel)].reindex(f).to_numpy() for p in levels}
+            color = f"C{i}"
+            _, lo = _band_average(f, curves[levels[0]])
+            _, hi = _band_average(f, curves[levels[-1]])
+            ax.fill_between(x, lo, hi, color=color, alpha=0.2,
+                            label=f"{h:g} months, p = {levels[0]:g}-{levels[-1]:g}")
+            if 0.5 in curves:
+                _, mid = _band_average(f, curves[0.5])
+                ax.plot(x, mid, color=color, lw=1.0, label=f"{h:g} months, p = 0.5")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("spatial frequency n (1/m)")
+        ax.set_title(channel)
+        if c == 0:
+            ax.set_ylabel("weighted mean PSD (mm²/(1/m))")
+            ax.legend(fontsize=7)
+    fig.suptitle("forecast spectra of the representative sets (eq. 56, fixed cumulative probability p)")
     return fig

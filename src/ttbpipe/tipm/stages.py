@@ -26,7 +26,7 @@ from .selection import TIPMSelection, TIPMSelector, selection_metrics
 
 __all__ = ["DEFAULTS", "resolve_config", "load_population", "population_dates", "months_between",
            "select_stage", "profiles_stage", "distribution_stage", "evolution_stage",
-           "forecast_stage", "validation_stage"]
+           "forecast_base", "sections_as_selection", "forecast_stage", "validation_stage"]
 
 log = logging.getLogger(__name__)
 
@@ -36,7 +36,8 @@ DEFAULTS: dict[str, Any] = {
                   "match_variance": True},
     "profiles": {"length_m": 1000.0, "dx_m": 0.25},
     "evolution": {"n_partitions": 5, "partition_scale": "log", "min_partition_count": 10},
-    "forecast": {"horizons_months": [6, 12], "levels": [0.05, 0.5, 0.95], "monte_carlo_paths": 200},
+    "forecast": {"base": "sections", "horizons_months": [6, 12], "levels": [0.05, 0.5, 0.95],
+                 "monte_carlo_paths": 200},
     "validation": {"holdout_campaigns": 12, "band": [0.05, 0.95], "monte_carlo_paths": 500},
 }
 
@@ -146,19 +147,53 @@ def evolution_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any],
     return model.to_table(), model.metadata()
 
 
-def forecast_stage(model: SpectralEvolution, selection_table: pd.DataFrame, weights: pd.DataFrame,
-                   base_date: str, tipm: Mapping[str, Any], psd: Mapping[str, Any], study_seed: int
+def sections_as_selection(population: PSDPopulation) -> TIPMSelection:
+    """A campaign's own sections as equally weighted PSD sets (the forecast base ``sections``)."""
+    n = population.n_sections
+    samples = pd.DataFrame({
+        "sample_index": np.arange(n), "weight": np.full(n, 1.0 / n), "stratum": np.arange(n),
+        "stratum_size": 1, "source_campaign_date": population.sections["campaign_date"].astype(str),
+        "source_section": population.sections["section"].to_numpy(),
+        "source_section_start_m": population.sections["section_start_m"].to_numpy(float),
+        "source_section_end_m": population.sections["section_end_m"].to_numpy(float)})
+    selection = TIPMSelection(population.psd_mm2_m, samples["weight"].to_numpy(),
+                              population.frequency_per_m, population.channels, samples, "sections")
+    for c, channel in enumerate(population.channels):
+        samples[f"tqi_{channel}_mm"] = selection.tqi_mm()[:, c]
+    return selection
+
+
+def forecast_base(tipm: Mapping[str, Any], psd: Mapping[str, Any], latest_psd: str | Path,
+                  selection_table: pd.DataFrame, weights: pd.DataFrame) -> TIPMSelection:
+    """The PSD sets the forecast starts from (``tipm.forecast.base``):
+
+    * ``sections`` (default): the latest campaign's own sections, equal weights — the current
+      state of the line, as in the paper's eq. 56 (P(ω; t_i) is the spectrum at t_i) and as in
+      the hold-out validation;
+    * ``selection``: the latest campaign's TIPM sets, which describe its whole population
+      (with ``population_campaigns: all`` the pooled history, not only the current state).
+    """
+    cfg = resolve_config(tipm)
+    if cfg["forecast"]["base"] == "selection":
+        return TIPMSelection.from_long_table(selection_table, weights)
+    return sections_as_selection(load_population([latest_psd], psd.get("wavelength_band_m"))[0])
+
+
+def forecast_stage(model: SpectralEvolution, selection: TIPMSelection, base_date: str,
+                   tipm: Mapping[str, Any], psd: Mapping[str, Any], study_seed: int
                    ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
-    """Forecasts of the latest campaign's representative sets at the configured horizons.
+    """Forecasts of the PSD sets ``selection`` (see :func:`forecast_base`) at the configured
+    horizons.
 
     Returns (forecast PSD table, forecast states table (one row per profile), profiles).
     ``envelope = "fixed_p"``: eq. 56 iterated with the constant index p = level (the states that
     get profiles); ``envelope = "monte_carlo"``: percentiles of simulated paths (p ~ U(0,1) per
-    step), the calibrated predictive band of docs/tipm.md.
+    step), the calibrated predictive band of docs/tipm.md. p = 0.5 is the median path, not the
+    mean: increments are right-skewed, so it may fall slightly below the starting spectrum at
+    short wavelengths.
     """
     cfg = resolve_config(tipm)
     f = cfg["forecast"]
-    selection = TIPMSelection.from_long_table(selection_table, weights)
     if selection.channels != model.channels or selection.frequency_per_m.shape != model.frequency_per_m.shape:
         raise ValueError("the selection and the evolution model have different channels or "
                          "frequency grids; rerun both with one psd configuration")

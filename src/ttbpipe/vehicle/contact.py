@@ -318,7 +318,8 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
                    ws_y: float, ws_z: float, ws_roll: float, ws_yaw: float,
                    ws_vy: float, ws_vz: float, ws_vroll: float, ws_vpitch: float, ws_vyaw: float,
                    rail_z: float, rail_y: float, rail_vz: float, rail_vy: float,
-                   row: np.ndarray, out: np.ndarray) -> None:
+                   row: np.ndarray, out: np.ndarray, creep_y_prev: float = 0.0,
+                   creep_relax: float = 0.0) -> float:
     """Contact forces on one wheel (side +1 left, -1 right) in track axes.
 
     ``rail_*`` are the rail-head displacement and velocity at the contact (structure plus
@@ -329,6 +330,16 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     xi_x = -(r - r0)/r0 - s a0 yaw'/V - r pitch'/V,
     xi_y = [(y_w' + r roll_w' - V yaw_w - y_rail') cos d + s (z_w' + s a0 roll_w' - z_rail') sin d]/V,
     xi_sp = yaw_w' cos d / V - s sin d / r0.
+
+    Semi-implicit lateral creepage (``creep_relax`` > 0, the coupled loop; docs/performance.md):
+    the lateral creep force is a stiff damper c = f22/V between the wheel and the light rail head
+    (explicit Zhai limit c dt m_eff^-1 ~ 1). The creepage used is
+    xi_y* = (xi_y + g xi_y*_prev) / (1 + g), g = f22 ``creep_relax`` = (f22/V) m_eff^-1 dt,
+    the backward-Euler estimate of the relative velocity after the step's own creep impulse,
+    taken as an increment on the previous step's value so that a steady creepage (yaw angle,
+    constant slip) gives exactly the Kalker force. Unconditionally stable for the damper; g -> 0
+    recovers the explicit law. Returns xi_y* (the raw xi_y when there is no contact), the state
+    for the next step. ``creep_relax`` = 0 (default: statics, tests) is the explicit law.
     """
     g_hertz, g_shear, e_mod, nu, mu, r0, a0, flange_gap, flange_k = (
         scal[0], scal[1], scal[2], scal[3], scal[4], scal[5], scal[6], scal[7], scal[8])
@@ -341,6 +352,10 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     fx = 0.0
     fy = 0.0
     mz = 0.0
+    v_lat = ws_vy + radius * ws_vroll - speed * ws_yaw - rail_vy
+    v_ver = ws_vz + side * a0 * ws_vroll - rail_vz
+    xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
+    xi_y_state = xi_y
     if normal > 0.0:
         c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * row[6])) ** (1.0 / 3.0)
         ab = row[4] * row[5] * c * c
@@ -349,9 +364,10 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
         f23 = g_shear * ab ** 1.5 * row[9]
         f33 = g_shear * ab * ab * row[10]
         xi_x = -(radius - r0) / r0 - side * a0 * ws_vyaw / speed - radius * ws_vpitch / speed
-        v_lat = ws_vy + radius * ws_vroll - speed * ws_yaw - rail_vy
-        v_ver = ws_vz + side * a0 * ws_vroll - rail_vz
-        xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
+        if creep_relax > 0.0:
+            g = f22 * creep_relax
+            xi_y = (xi_y + g * creep_y_prev) / (1.0 + g)
+            xi_y_state = xi_y
         xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
         tx = -f11 * xi_x
         ty = -f22 * xi_y - f23 * xi_sp
@@ -373,6 +389,7 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     out[4] = normal
     out[5] = y_rel
     out[6] = penetration
+    return xi_y_state
 
 
 def wheel_contact(side: float, geom: ContactGeometry, speed: float, ws: dict, rail: dict) -> np.ndarray:

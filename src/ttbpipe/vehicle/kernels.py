@@ -30,7 +30,21 @@ def _csr_matvec_sub(indptr, indices, data, x, out):
 
 @njit(cache=True)
 def _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp):
+    """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``
+    (explicit creep law; see :func:`_train_contact_relaxed`)."""
+    creep_state = np.zeros((ws_dofs.shape[0], 2))
+    _train_contact_relaxed(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp,
+                           creep_state, 0.0)
+
+
+@njit(cache=True)
+def _train_contact_relaxed(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp,
+                           creep_state, creep_relax):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``.
+
+    ``creep_state[ws, side]``: semi-implicit lateral creepage of the previous step, updated in
+    place; ``creep_relax`` = m_eff^-1 dt / V (0: explicit law); see
+    :func:`ttbpipe.vehicle.contact._wheel_contact`.
 
     A contact at (0, s a0, -r) from the wheelset centre with force (F_x, F_y, F_z) and spin moment
     M about the normal gives: y += F_y, z += F_z, roll += s a0 F_z + r F_y, pitch (spin)
@@ -47,10 +61,11 @@ def _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, ro
         iw = ws_dofs[w, 4]
         for k in range(2):
             side = 1.0 if k == 0 else -1.0
-            _wheel_contact(side, table, scal, speed,
-                           q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip], v[iw],
-                           rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3],
-                           row, tmp)
+            creep_state[w, k] = _wheel_contact(
+                side, table, scal, speed,
+                q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip], v[iw],
+                rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3],
+                row, tmp, creep_state[w, k], creep_relax)
             fx = tmp[0]
             fy = tmp[1]
             fz = tmp[2]

@@ -1,0 +1,278 @@
+"""One sample of a study: its case configuration, the coupled run, its extremes and histories.
+
+:func:`run_sample` is a pure function of (simulation settings, design row, input paths): it builds
+the sample's case from the study's structure, train and run settings (config ``structure:`` and
+``simulation:``), its irregularity profile and its parameter-field factors, runs
+:func:`ttbpipe.simulation.coupled.run_coupled`, and reduces the run to one row of the extremes
+table and a block of the time-history table (docs/results_schema.md). It has no side effect
+outside a private temporary folder, so it runs the same in the batch loop and on a Dask worker.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import json
+import logging
+import re
+import tempfile
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from .design import STREAM_ID, scenario_key
+
+log = logging.getLogger(__name__)
+
+#: Defaults of the ``simulation:`` section (config/config.yaml documents each key).
+SIMULATION_DEFAULTS: dict[str, Any] = {
+    "train": {"composition": ["motor", "trailer", "motor"],
+              "contact": {"profile": "conical", "conicity": 0.04}},
+    "speed_kmh": 300.0,
+    "time_step_s": 4.0e-5,
+    "output_interval_s": 2.0e-3,
+    "end_x_m": None,
+    "irregularity": {"spectrum": "tbt3352", "dx_m": 0.25, "fade_in_m": 20.0, "lead_in_m": 20.0},
+    "deck_filter_hz": 30.0,
+    "history": {"span": None, "wheel": "car1_ws1_left", "carbody_point": "car1_body_front"},
+    "batch_size": 4,
+    "executor": "local",
+    "dask": {"scheduler": None, "local_workers": 2},
+}
+
+PROFILE_CHANNELS = ("vertical_mm", "alignment_mm", "cross_level_mm", "gauge_mm")
+
+
+def resolve_simulation(section: Mapping[str, Any] | None) -> dict[str, Any]:
+    """``simulation:`` with missing keys (one level deep) filled from :data:`SIMULATION_DEFAULTS`."""
+    section = dict(section or {})
+    out: dict[str, Any] = {}
+    for key, default in SIMULATION_DEFAULTS.items():
+        if isinstance(default, dict) and key != "train":
+            out[key] = {**default, **dict(section.get(key) or {})}
+        else:
+            out[key] = copy.deepcopy(section.get(key, default))
+    unknown = sorted(set(section) - set(SIMULATION_DEFAULTS))
+    if unknown:
+        raise ValueError(f"simulation: unknown key(s) {unknown}")
+    return out
+
+
+def mean_spectrum_seed(study_seed: int) -> int:
+    """Seed of the single deterministic irregularity of the fields scenarios (same for all)."""
+    seq = np.random.SeedSequence([int(study_seed), STREAM_ID, scenario_key("mean_spectrum")])
+    return int(seq.generate_state(1)[0])
+
+
+@functools.lru_cache(maxsize=8)
+def _field_sampler(fields_json: str, structure_json: str, study_seed: int, condition: str):
+    """FieldSampler of one randomness condition on the structure's carriers (cached per process:
+    the KL bases and Nataf solves are computed once per batch/worker, not per sample)."""
+    from ..fields.sampling import FieldSampler, positions_from_structure
+
+    fields = json.loads(fields_json)
+    if condition != "all":
+        groups = fields.get("groups", {})
+        if condition not in groups:
+            raise ValueError(f"fields.groups has no group {condition} (randomness condition of "
+                             "study.scenarios.fields.conditions)")
+        fields["groups"] = {name: {**g, "enabled": name == condition} for name, g in groups.items()}
+    positions = positions_from_structure(json.loads(structure_json))
+    return FieldSampler(fields, study_seed, positions=positions)
+
+
+def field_factors(fields: Mapping[str, Any], structure: Mapping[str, Any], study_seed: int,
+                  condition: str, sample_index: int) -> dict[str, np.ndarray]:
+    """Factors {parameter: array over the structure's carriers} of one fields sample.
+
+    Group g's numbers come from ``sample_generator(seed, i, stream_g)`` whatever the other groups,
+    so condition ``C2`` sample i equals the C2 columns of sample i of the fields stage
+    (``results/fields/samples.parquet`` with ``fields.geometry.source: structure``).
+    """
+    sampler = _field_sampler(json.dumps(fields, sort_keys=True, default=str),
+                             json.dumps(structure, sort_keys=True, default=str), int(study_seed),
+                             str(condition))
+    return sampler.sample(int(sample_index))
+
+
+def read_profile(path: str, id_column: str, profile_index: int) -> pd.DataFrame:
+    """One profile (chainage_m + the four channels in mm) from a TIPM profiles table."""
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(path, filters=[(id_column, "==", int(profile_index))]).to_pandas()
+    if table.empty:
+        raise KeyError(f"{path}: no profile with {id_column} = {profile_index}")
+    missing = [c for c in ("chainage_m", *PROFILE_CHANNELS) if c not in table.columns]
+    if missing:
+        raise ValueError(f"{path}: missing column(s) {missing}")
+    return table.sort_values("chainage_m")[["chainage_m", *PROFILE_CHANNELS]].reset_index(drop=True)
+
+
+def build_case(sim: Mapping[str, Any], structure: Mapping[str, Any], *,
+               irregularity: Mapping[str, Any], properties: Mapping[str, Any] | None = None
+               ) -> dict[str, Any]:
+    """Case configuration of :func:`run_coupled` from the study's simulation settings."""
+    run = {"track": "structure", "speed_kmh": float(sim["speed_kmh"]),
+           "time_step_s": sim["time_step_s"], "output_interval_s": float(sim["output_interval_s"])}
+    if sim.get("end_x_m") is not None:
+        run["end_x_m"] = float(sim["end_x_m"])
+    case = {"structure": copy.deepcopy(dict(structure)), "train": copy.deepcopy(sim["train"]),
+            "simulation": run, "irregularity": dict(irregularity)}
+    if properties:
+        case["properties"] = dict(properties)
+    return case
+
+
+def _history_columns(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) -> dict[str, str]:
+    """Map time-history quantity (schema name) -> column of the coupled run's table."""
+    h = sim["history"]
+    span = int(h["span"]) if h.get("span") else n_spans // 2 + 1   # middle span by default
+    wheel, point = h["wheel"], h["carbody_point"]
+    wanted = {
+        "girder_vertical_acc_m_s2": f"girder_span{span}_mid_z_acc_m_s2",
+        "girder_lateral_acc_m_s2": f"girder_span{span}_mid_y_acc_m_s2",
+        "girder_vertical_disp_m": f"girder_span{span}_mid_z_disp_mm",
+        "rail_vertical_acc_m_s2": f"rail_left_span{span}_mid_z_acc_m_s2",
+        "rail_lateral_acc_m_s2": f"rail_left_span{span}_mid_y_acc_m_s2",
+        "carbody_vertical_acc_m_s2": f"{point}_az_m_s2",
+        "carbody_lateral_acc_m_s2": f"{point}_ay_m_s2",
+        "wheel_vertical_force_N": f"{wheel}_P_N",
+        "wheel_lateral_force_N": f"{wheel}_Q_N",
+        "derailment_coefficient": f"{wheel}_QP",
+    }
+    missing = {k: v for k, v in wanted.items() if v not in table.columns}
+    if missing:
+        raise ValueError(f"simulation.history: the run has no column(s) {sorted(missing.values())}; "
+                         "check history.span, history.wheel (e.g. car1_ws1_left) and "
+                         "history.carbody_point (e.g. car1_body_front)")
+    return wanted
+
+
+def _lowpass_peak(values: np.ndarray, dt: float, cutoff_hz: float) -> float:
+    """max |x| after a zero-phase 4th-order Butterworth low-pass at cutoff_hz (EN 1990 A2
+    A2.4.4.2.1: deck accelerations are checked for frequencies up to 30 Hz)."""
+    from scipy import signal
+
+    nyquist = 0.5 / dt
+    if cutoff_hz >= 0.95 * nyquist:
+        return float(np.max(np.abs(values)))
+    sos = signal.butter(4, cutoff_hz, fs=1.0 / dt, output="sos")
+    return float(np.max(np.abs(signal.sosfiltfilt(sos, values))))
+
+
+def extremes_from_run(table: pd.DataFrame, summary: Mapping[str, Any], sim: Mapping[str, Any],
+                      n_spans: int) -> dict[str, float]:
+    """Response indices of one run, named as in docs/results_schema.md (mapping table there)."""
+    out: dict[str, float] = {
+        "train_speed_m_s": float(summary["speed_kmh"]) / 3.6,
+        "static_wheel_load_N": float(min(min(v) for v in summary["static_wheel_load_N"].values())),
+        "max_derailment_coefficient": float(summary["max_derailment_coefficient"]),
+        "max_wheel_unloading_ratio": float(summary["max_wheel_unloading"]),
+        "max_lateral_wheelset_force_N": float(summary["max_wheelset_lateral_force_N"]),
+        "max_wheel_vertical_force_N": float(summary["max_wheel_load_N"]),
+        "max_wheel_lateral_force_N": float(summary["max_lateral_wheel_force_N"]),
+        "max_carbody_vertical_acc_m_s2": float(summary["max_carbody_vertical_acc_m_s2"]),
+        "max_carbody_lateral_acc_m_s2": float(summary["max_carbody_lateral_acc_m_s2"]),
+    }
+    sperling = summary["sperling"]
+    for direction in ("vertical", "lateral"):
+        per_car = {k: v for k, v in sperling.items() if k.endswith(f"_{direction}")}
+        out[f"sperling_{direction}"] = float(max(per_car.values()))
+        for key, value in sorted(per_car.items()):
+            out[f"sperling_{direction}_{key.split('_')[0]}"] = float(value)
+    peaks = summary.get("monitor_peaks", {})
+    dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
+    cutoff = float(sim["deck_filter_hz"])
+    for direction, axis in (("vertical", "z"), ("lateral", "y")):
+        deck = [c for c in table.columns if c.startswith("girder_span") and c.endswith(f"_mid_{axis}_acc_m_s2")]
+        rail = [k for k in peaks if k.startswith("rail_") and k.endswith(f"_{axis}_acc_m_s2")]
+        if deck:
+            out[f"max_deck_{direction}_acc_m_s2"] = max(
+                _lowpass_peak(table[c].to_numpy(float), dt_out, cutoff) for c in deck)
+        if rail:
+            out[f"max_rail_{direction}_acc_m_s2"] = float(max(peaks[k] for k in rail))
+    disp = [k for k in peaks if k.startswith("girder_span") and k.endswith("_z_disp_mm")]
+    if disp:
+        out["max_girder_vertical_disp_m"] = 1e-3 * float(max(peaks[k] for k in disp))
+    for s in range(1, n_spans + 1):
+        for axis, name in (("z", "vertical"), ("y", "lateral")):
+            col = f"girder_span{s}_mid_{axis}_acc_m_s2"
+            if col in table.columns:
+                out[f"max_span{s}_{name}_acc_m_s2"] = _lowpass_peak(table[col].to_numpy(float),
+                                                                   dt_out, cutoff)
+    bad = {k: v for k, v in out.items() if not np.isfinite(v)}
+    if bad:
+        raise RuntimeError(f"non-finite response indices {bad}: numerical trouble in the run; "
+                           "reduce simulation.time_step_s")
+    return out
+
+
+def history_from_run(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) -> pd.DataFrame:
+    """Time-history block of one run against the leading wheelset's position (``position_m``).
+
+    All samples of a study share speed, time step, output interval and start, so the grid
+    x_lead(t) is the same for every sample (no resampling needed); units converted to SI.
+    """
+    columns = _history_columns(table, sim, n_spans)
+    out = {"position_m": table["x_lead_m"].to_numpy(float)}
+    for name, col in columns.items():
+        values = table[col].to_numpy(float)
+        out[name] = values * 1e-3 if col.endswith("_mm") else values
+    return pd.DataFrame(out)
+
+
+def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any],
+               structure: Mapping[str, Any], fields: Mapping[str, Any] | None,
+               profiles: Mapping[str, str]) -> tuple[dict[str, Any], pd.DataFrame]:
+    """Simulate one design row; returns (extremes row, history block) with the key columns.
+
+    ``profiles``: {"irregularity": representative profiles path, "forecast": forecast profiles
+    path} (only the one the row's kind needs).
+    """
+    kind, index = str(row["kind"]), int(row["sample_index"])
+    irr_cfg = sim["irregularity"]
+    properties = None
+    with tempfile.TemporaryDirectory(prefix="ttbpipe_sample_") as tmp:
+        if kind in ("irregularity", "forecast"):
+            id_column = "sample_index" if kind == "irregularity" else "profile_index"
+            prof = read_profile(profiles[kind], id_column, int(row["profile_index"]))
+            # the profile's chainage starts lead_in_m behind x = 0 of the structure so that it
+            # covers the wheels of a train starting at the beginning of the rails
+            prof["chainage_m"] = prof["chainage_m"] - prof["chainage_m"].iloc[0] - float(irr_cfg["lead_in_m"])
+            path = Path(tmp) / "profile.parquet"
+            prof.to_parquet(path)
+            irregularity = {"source": "file", "file": str(path), "fade_in_m": irr_cfg["fade_in_m"]}
+        elif kind in ("fields", "single"):
+            irregularity = {"source": "synthetic", "spectrum": irr_cfg["spectrum"],
+                            "dx_m": irr_cfg["dx_m"], "fade_in_m": irr_cfg["fade_in_m"],
+                            "seed": mean_spectrum_seed(study_seed)}
+        if kind == "fields":
+            if fields is None:
+                raise ValueError("scenario fields needs the fields: section of the configuration")
+            factors = field_factors(fields, structure, study_seed, str(row["condition"]), index)
+            rows = [pd.DataFrame({"sample_index": index, "parameter": name,
+                                  "carrier_index": np.arange(v.size), "factor": v})
+                    for name, v in factors.items()]
+            path = Path(tmp) / "factors.parquet"
+            pd.concat(rows, ignore_index=True).to_parquet(path)
+            properties = {"field_samples": {"path": str(path), "sample_index": index}}
+        elif kind not in ("irregularity", "forecast", "single"):
+            raise ValueError(f"design row {row['scenario']}/{index}: unknown kind {kind!r}")
+        case = build_case(sim, structure, irregularity=irregularity, properties=properties)
+        from ..simulation.coupled import run_coupled
+
+        try:
+            table, summary = run_coupled(case)
+        except Exception as exc:
+            raise RuntimeError(f"sample ({row['scenario']}, {index}) failed: {exc}") from exc
+    n_spans = len({m.group(1) for c in table.columns
+                   if (m := re.match(r"girder_span(\d+)_mid_z_acc_m_s2$", c))}) or 1
+    keys = {"sample_index": index, "scenario": str(row["scenario"]), "weight": float(row["weight"]),
+            "seed_entropy": str(row["seed_entropy"])}
+    extremes = {**keys, **extremes_from_run(table, summary, sim, n_spans)}
+    history = history_from_run(table, sim, n_spans)
+    for k in ("weight", "scenario", "sample_index"):   # history key columns (results_schema.md)
+        history.insert(0, k, keys[k])
+    return extremes, history

@@ -1,0 +1,85 @@
+# Stage: study aggregation, reliability and the report (issue 7; docs/studies.md, docs/reliability.md).
+# Reads every batch file of the design one at a time (memory independent of the sample count).
+
+STUDY_OUT = "results/study"
+
+
+rule aggregate_study:
+    """Extremes, history statistics, exceedance probabilities, Table 1, figures, report pages."""
+    input:
+        unpack(study_batch_files),
+        design="results/study/design.parquet",
+    output:
+        extremes=f"{STUDY_OUT}/extremes.parquet",
+        history=f"{STUDY_OUT}/history_statistics.parquet",
+        reliability=f"{STUDY_OUT}/reliability.parquet",
+        convergence=f"{STUDY_OUT}/convergence.parquet",
+        table1=f"{STUDY_OUT}/table1_std.parquet",
+        table1_history=f"{STUDY_OUT}/table1_history_std.parquet",
+        summary_rst=f"{STUDY_OUT}/summary.rst",
+        summary=report(
+            f"{STUDY_OUT}/report/summary.html",
+            # the caption is the generated first page itself: the report's main page
+            # (workflow/report/workflow.rst) embeds it
+            caption="../../results/study/summary.rst",
+            category="0. Summary",
+        ),
+        reliability_html=report(
+            f"{STUDY_OUT}/report/reliability.html",
+            caption="../report/study_reliability.rst",
+            category="0. Summary",
+        ),
+        table1_html=report(
+            f"{STUDY_OUT}/report/table1_std.html",
+            caption="../report/study_table1.rst",
+            category="4. Randomness of parameters (Table 1)",
+        ),
+        table1_history_html=report(
+            f"{STUDY_OUT}/report/table1_history_std.html",
+            caption="../report/study_table1_history.rst",
+            category="4. Randomness of parameters (Table 1)",
+        ),
+        configuration=report(
+            f"{STUDY_OUT}/report/configuration.html",
+            caption="../report/study_configuration.rst",
+            category="9. Configuration",
+        ),
+        convergence_figures=report(
+            directory(f"{STUDY_OUT}/figures/convergence"),
+            patterns=["{scenario}.png"],
+            caption="../report/stats_exceedance_convergence.rst",
+            category="1. Reliability",
+            subcategory="Convergence of exceedance probabilities",
+        ),
+        pdf_figures=report(
+            directory(f"{STUDY_OUT}/figures/pdf"),
+            patterns=["{group}_{index}.png"],
+            caption="../report/stats_extreme_pdfs.rst",
+            category="3. Extremes",
+            subcategory="{group} scenarios",
+        ),
+        history_figures=report(
+            directory(f"{STUDY_OUT}/figures/history"),
+            patterns=["{group}_{quantity}.png"],
+            caption="../report/stats_history_statistics.rst",
+            category="5. Time histories",
+            subcategory="{group} scenarios",
+        ),
+        envelope_figures=report(
+            directory(f"{STUDY_OUT}/figures/envelope"),
+            patterns=["{index}.png"],
+            caption="../report/stats_forecast_envelope.rst",
+            category="6. Forecast",
+        ),
+    params:
+        limits=config.get("limits"),
+        version=MODEL_VERSION,
+    log:
+        "logs/study/aggregate.log",
+    script:
+        "../scripts/aggregate_study.py"
+
+
+def study_targets() -> list[str]:
+    """Final outputs of the study (the design is a checkpoint; the batches follow from it)."""
+    return [f"{STUDY_OUT}/extremes.parquet", f"{STUDY_OUT}/report/summary.html"]

@@ -1,0 +1,102 @@
+# Stage: study simulation (issue 7; docs/studies.md). Samples of the TIPM irregularity sets, their
+# forecast states and the random parameter fields, simulated in batches by the coupled model.
+#
+# The number of TIPM representative sets depends on the data (the campaigns' sections), so the
+# design is a checkpoint: `study_design` lists every sample (scenario, sample_index, weight, seed)
+# and the batch jobs appear once it exists. Scenario labels are known from the configuration.
+# A batch file's content depends only on its samples, never on the batch size or core count.
+
+import pandas as _pd
+
+from ttbpipe.study.batch import batch_paths as _study_batch_paths
+from ttbpipe.study.design import batches as _study_batches
+from ttbpipe.study.design import resolve_scenarios as _study_resolve_scenarios
+from ttbpipe.study.design import scenario_labels as _study_scenario_labels
+from ttbpipe.study.samples import resolve_simulation as _study_resolve_simulation
+
+STUDY_SIMULATION = _study_resolve_simulation(config.get("simulation"))
+STUDY_SCENARIOS = _study_resolve_scenarios(config["study"])
+STUDY_BATCH_ROOT = "results/study/batches"
+_STUDY_HORIZONS = [float(h) for h in TIPM.get("forecast", {}).get("horizons_months", [6, 12])]
+STUDY_LABELS = _study_scenario_labels(config["study"], TIPM_LAST, _STUDY_HORIZONS)
+STUDY_KIND = {label: kind for kind, labels in STUDY_LABELS.items() for label in labels}
+# Snakemake threads of a batch job: a LocalCluster batch occupies its workers' cores.
+_STUDY_THREADS = (int(STUDY_SIMULATION["dask"]["local_workers"])
+                  if STUDY_SIMULATION["executor"] == "dask"
+                  and not (os.environ.get("TTBPIPE_DASK_SCHEDULER")
+                           or STUDY_SIMULATION["dask"]["scheduler"]) else 1)
+
+wildcard_constraints:
+    first=r"\d{5}",
+    last=r"\d{5}",
+
+
+def study_design_inputs(wildcards) -> dict[str, str]:
+    """TIPM tables the design needs: the latest campaign's weights, the forecast states."""
+    inputs = {}
+    if STUDY_LABELS["irregularity"]:
+        inputs["weights"] = f"results/tipm/selection/{TIPM_LAST}.weights.parquet"
+    if STUDY_LABELS["forecast"]:
+        inputs["states"] = "results/tipm/forecast_states.parquet"
+    return inputs
+
+
+checkpoint study_design:
+    """Every sample of the study: scenario, index, probability weight, profile, seed entropy."""
+    input:
+        unpack(study_design_inputs),
+    output:
+        "results/study/design.parquet",
+    params:
+        study=config["study"],
+        latest_campaign=TIPM_LAST,
+        horizons_months=_STUDY_HORIZONS,
+        version=MODEL_VERSION,
+    log:
+        "logs/study/design.log",
+    script:
+        "../scripts/study_design.py"
+
+
+def study_batch_inputs(wildcards) -> dict[str, str]:
+    """The design and the irregularity profiles the batch's scenario reads."""
+    kind = STUDY_KIND.get(wildcards.scenario)
+    if kind is None:
+        raise WorkflowError(f"unknown study scenario {wildcards.scenario!r}; the configured ones "
+                            f"are {sorted(STUDY_KIND)}")
+    inputs = {"design": "results/study/design.parquet"}
+    if kind == "irregularity":
+        inputs["profiles"] = f"results/tipm/profiles/{TIPM_LAST}.parquet"
+    elif kind == "forecast":
+        inputs["profiles"] = "results/tipm/forecast_profiles.parquet"
+    return inputs
+
+
+rule simulate_batch:
+    """Coupled runs of samples first..last of one scenario: extremes and time histories."""
+    input:
+        unpack(study_batch_inputs),
+    output:
+        extremes=f"{STUDY_BATCH_ROOT}/{{scenario}}/extremes_{{first}}-{{last}}.parquet",
+        histories=f"{STUDY_BATCH_ROOT}/{{scenario}}/histories_{{first}}-{{last}}.parquet",
+    params:
+        # what a sample's result depends on (not batch_size / executor: results are identical)
+        simulation={k: v for k, v in STUDY_SIMULATION.items()
+                    if k not in ("batch_size", "executor", "dask")},
+        structure=config.get("structure", {}),
+        fields=config.get("fields"),
+        seed=config["study"]["seed"],
+        version=MODEL_VERSION,
+    threads: _STUDY_THREADS
+    log:
+        "logs/study/batches/{scenario}/{first}-{last}.log",
+    script:
+        "../scripts/simulate_batch.py"
+
+
+def study_batch_files(wildcards=None) -> dict[str, list[str]]:
+    """Every batch file of the design (evaluated after the study_design checkpoint)."""
+    design = _pd.read_parquet(checkpoints.study_design.get().output[0])
+    pairs = [_study_batch_paths(STUDY_BATCH_ROOT, *b)
+             for b in _study_batches(design, STUDY_SIMULATION["batch_size"])]
+    return {"extremes": [p[0] for p in pairs], "histories": [p[1] for p in pairs]}
