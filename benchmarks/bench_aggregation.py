@@ -96,6 +96,9 @@ def main() -> None:
     values = args.samples * args.points * 2
     print(f"aggregate_histories: {t_agg:.1f} s wall ({values / t_agg / 1e6:.1f} M values/s, two "
           f"passes), {trace.files_read} file reads")
+    # machine-readable figures for benchmarks/run_all.py
+    print(f"FIGURE aggregation_{args.samples}_samples = {t_agg:.4g} s")
+    print(f"FIGURE extremes_and_limits_{args.samples}_samples = {t_ext:.4g} s")
     print(f"  largest batch held: {trace.max_rows_in_memory} rows; accumulator state "
           f"{trace.state_nbytes / 1e6:.1f} MB; RSS {rss.start:.0f} -> peak {rss.peak:.0f} MB "
           f"(+{rss.peak - rss.start:.0f} MB during aggregation)")

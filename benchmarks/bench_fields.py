@@ -48,6 +48,9 @@ def main() -> None:
         print(f"{method}: set-up {t_setup * 1e3:.1f} ms; {n_default} samples -> table "
               f"({len(df)} rows) {t_draw * 1e3:.1f} ms; 1000 samples (arrays) "
               f"{t_1000:.2f} s = {t_1000 / 1000:.2e} s/sample; coefficients per parameter {coeffs}")
+        # machine-readable figures for benchmarks/run_all.py
+        print(f"FIGURE field_sampling_{method}_setup = {t_setup:.4g} s")
+        print(f"FIGURE field_sampling_{method}_per_sample = {t_1000 / 1000:.4g} s")
 
     print("== long line, eq. 34 division: 5 km plain track, C2 pads, 50 segments of 100 m ==")
     long_fields = dict(fields, geometry={"line_length_m": 5000.0, "fastener_spacing_m": 0.63},

@@ -54,6 +54,7 @@ def main() -> None:
     t4, profiles = timed(lambda: synthesize_profiles(spectrum, length_m, dx, seed=1))
     print(f"synthesis, {length_m / 1e3:g} km at {dx} m ({len(profiles)} samples): "
           f"one channel {t1:.3f} s, four channels {t4:.3f} s")
+    print(f"FIGURE irregularity_synthesis_{length_m / 1e3:g}_km_4_channels = {t4:.4g} s")
     for channel in SPECTRAL_CHANNELS:
         rms = np.sqrt(np.mean(profiles[f"{channel}_mm"] ** 2))
         target = spectrum.band_rms_mm(channel)

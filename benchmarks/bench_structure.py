@@ -58,6 +58,9 @@ def main() -> None:
     print(f"wall s per simulated s:        {best['wall_s_per_simulated_s']:.3f}")
     print(f"CPU s per simulated s:         {best['cpu_s_per_simulated_s']:.3f}  (process time; "
           f"differs from wall when the cores are shared, load average {os.getloadavg()[0]:.1f})")
+    print(f"FIGURE structure_moving_loads_us_per_step = {1e6 * best['wall_s'] / best['n_steps']:.4g} us")
+    print(f"FIGURE structure_moving_loads_wall_s_per_simulated_s = "
+          f"{best['wall_s_per_simulated_s']:.4g} s/s")
     at = stab   # model.stable_time_step() is already 0.9 x the limit
     print(f"at dt = {at:.3e} s (0.9 x limit): wall s per simulated s ~ "
           f"{best['wall_s_per_simulated_s'] * args.dt / at:.3f}")

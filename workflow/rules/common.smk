@@ -20,6 +20,15 @@ CAMPAIGN_FILE = re.compile(rf"^({DATE_PATTERN})\.(csv|parquet)$")
 wildcard_constraints:
     date=DATE_PATTERN,
 
+# Cheap rules (seconds) run on the submitting node under a cluster executor instead of waiting in
+# the queue (profiles/slurm, docs/cluster.md). Only rules that exist are listed.
+localrules:
+    all,
+    study_design,
+    sample_fields,
+    plot_psd_vs_standard,
+    tipm_figures,
+
 
 def _add_months(date: _dt.date, months: int) -> _dt.date:
     """Same day of month `months` later (clamped to the month's last day)."""

@@ -32,12 +32,12 @@ rule aggregate_study:
         table1_html=report(
             f"{STUDY_OUT}/report/table1_std.html",
             caption="../report/study_table1.rst",
-            category="4. Randomness of parameters (Table 1)",
+            category="5. Randomness of parameters (Table 1)",
         ),
         table1_history_html=report(
             f"{STUDY_OUT}/report/table1_history_std.html",
             caption="../report/study_table1_history.rst",
-            category="4. Randomness of parameters (Table 1)",
+            category="5. Randomness of parameters (Table 1)",
         ),
         configuration=report(
             f"{STUDY_OUT}/report/configuration.html",
@@ -48,28 +48,28 @@ rule aggregate_study:
             directory(f"{STUDY_OUT}/figures/convergence"),
             patterns=["{scenario}.png"],
             caption="../report/stats_exceedance_convergence.rst",
-            category="1. Reliability",
+            category="3. Reliability",
             subcategory="Convergence of exceedance probabilities",
         ),
         pdf_figures=report(
             directory(f"{STUDY_OUT}/figures/pdf"),
             patterns=["{group}_{index}.png"],
             caption="../report/stats_extreme_pdfs.rst",
-            category="3. Extremes",
+            category="4. Extremes",
             subcategory="{group} scenarios",
         ),
         history_figures=report(
             directory(f"{STUDY_OUT}/figures/history"),
             patterns=["{group}_{quantity}.png"],
             caption="../report/stats_history_statistics.rst",
-            category="5. Time histories",
+            category="6. Time histories",
             subcategory="{group} scenarios",
         ),
         envelope_figures=report(
             directory(f"{STUDY_OUT}/figures/envelope"),
             patterns=["{index}.png"],
             caption="../report/stats_forecast_envelope.rst",
-            category="6. Forecast",
+            category="7. Forecast",
         ),
     params:
         limits=config.get("limits"),

@@ -7,6 +7,7 @@
 # A batch file's content depends only on its samples, never on the batch size or core count.
 
 import pandas as _pd
+from snakemake.logging import logger as _smk_logger
 
 from ttbpipe.study.batch import batch_paths as _study_batch_paths
 from ttbpipe.study.design import batches as _study_batches
@@ -18,7 +19,13 @@ STUDY_SIMULATION = _study_resolve_simulation(config.get("simulation"))
 STUDY_SCENARIOS = _study_resolve_scenarios(config["study"])
 STUDY_BATCH_ROOT = "results/study/batches"
 _STUDY_HORIZONS = [float(h) for h in TIPM.get("forecast", {}).get("horizons_months", [6, 12])]
-STUDY_LABELS = _study_scenario_labels(config["study"], TIPM_LAST, _STUDY_HORIZONS)
+STUDY = config["study"]
+if STUDY_SCENARIOS["forecast"]["enabled"] and len(CAMPAIGNS) < 2:
+    # the spectral evolution needs two campaigns (tipm.smk makes no forecast then)
+    _smk_logger.warning("study.scenarios.forecast: only one inspection campaign, no forecast to simulate")
+    STUDY = {**STUDY, "scenarios": {**STUDY.get("scenarios", {}),
+                                    "forecast": {**STUDY_SCENARIOS["forecast"], "enabled": False}}}
+STUDY_LABELS = _study_scenario_labels(STUDY, TIPM_LAST, _STUDY_HORIZONS)
 STUDY_KIND = {label: kind for kind, labels in STUDY_LABELS.items() for label in labels}
 # Snakemake threads of a batch job: a LocalCluster batch occupies its workers' cores.
 _STUDY_THREADS = (int(STUDY_SIMULATION["dask"]["local_workers"])
@@ -48,7 +55,7 @@ checkpoint study_design:
     output:
         "results/study/design.parquet",
     params:
-        study=config["study"],
+        study=STUDY,
         latest_campaign=TIPM_LAST,
         horizons_months=_STUDY_HORIZONS,
         version=MODEL_VERSION,

@@ -6,14 +6,28 @@ from ttbpipe.study.batch import simulate_batch
 from ttbpipe.study.design import batch_rows
 from ttbpipe.workflow import snakemake_context
 
-snakemake = snakemake_context(globals(), "simulate_batch", scenario="C1", first="00000",
-                              last="00003")
-setup_logging(snakemake.log[0])
-w = snakemake.wildcards
-rows = batch_rows(read_table(snakemake.input.design), w.scenario, int(w.first), int(w.last))
-profiles = {}
-if "profiles" in snakemake.input.keys():
-    profiles = {str(rows["kind"].iloc[0]): snakemake.input.profiles}
-simulate_batch(rows, snakemake.config, profiles, snakemake.output.extremes,
-               snakemake.output.histories, scenario=w.scenario, first=int(w.first),
-               last=int(w.last))
+
+def main(snakemake) -> None:
+    setup_logging(snakemake.log[0])
+    w = snakemake.wildcards
+    rows = batch_rows(read_table(snakemake.input.design), w.scenario, int(w.first), int(w.last))
+    config = dict(snakemake.config)
+    simulation = dict(config.get("simulation") or {})
+    if simulation.get("executor") == "dask":
+        # a LocalCluster gets the cores Snakemake granted this job (threads: local_workers,
+        # capped by --cores); an external scheduler ignores local_workers
+        simulation["dask"] = {**dict(simulation.get("dask") or {}),
+                              "local_workers": snakemake.threads}
+        config["simulation"] = simulation
+    profiles = {}
+    if "profiles" in snakemake.input.keys():
+        profiles = {str(rows["kind"].iloc[0]): snakemake.input.profiles}
+    simulate_batch(rows, config, profiles, snakemake.output.extremes, snakemake.output.histories,
+                   scenario=w.scenario, first=int(w.first), last=int(w.last))
+
+
+# Dask's LocalCluster starts its workers with multiprocessing "spawn", which re-imports this
+# script as __mp_main__ in every worker: the batch must run only in the main process.
+if __name__ == "__main__":
+    main(snakemake_context(globals(), "simulate_batch", scenario="C1", first="00000",
+                           last="00003"))

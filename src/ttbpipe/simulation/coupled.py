@@ -17,6 +17,8 @@ Case configuration (all sections optional; SI units unless the key says otherwis
       speed_kmh: 300                    # or train.speed_kmh
       time_step_s: 1.0e-4               # or auto: min(contact limit, structure limit)
       check_time_step: true             # the structure's own check (the contact check always runs)
+      lateral_creep: semi_implicit      # or explicit: the lateral creep damper f22/V on the rail
+                                        #  head, semi-implicit (no step limit; docs/performance.md)
       output_interval_s: 1.0e-3         # or output_every: n steps
       duration_s: null                  # alternative to end_x_m
       start_x_m: null                   # leading wheelset at t=0 (default: rear wheelset 5 m

@@ -204,8 +204,8 @@ class StructureModel:
     slab_elements: np.ndarray        # (n, 2) x of slab element ends
     slab_element_node0: np.ndarray   # first DOF of node a of each slab element
     fixed: np.ndarray                # bool mask of fixed DOFs
-    link_kinds: list                 # kind of each CSR link (ballast, bearing, pier, ...)
-    triple_kinds: list = field(default_factory=list)   # "pad" | "ca" | "ballast" per triple
+    link_kinds: list                 # kind of each CSR link (bearing, pier)
+    triple_kinds: list = field(default_factory=list)   # "ca" per triple (pads: pad_*, ballast: bal_*)
 
     @property
     def n_dof(self) -> int:
@@ -438,11 +438,15 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                 return s, *red.rows_at(x)
         return None
 
+    # rail pads, compact form (kernels._pad_forces), grouped slab / ballasted / rigid:
+    # (rail DOF, seat a, seat b, (xi, L, e), k3, c3) per pad
+    pads: dict[str, list] = {"slab": [], "ballasted": [], "rigid": []}
+    bal_sleeper = bal_block = bal_next = np.zeros(0, dtype=np.int64)
+    half_gauge = 0.5 * float(fas["rail_centre_distance_m"])
+    d_f = float(rail_c["foot_depth_m"])
+    t_half = 0.5 * float(slab_c["thickness_m"])
     if has_track:
-        half_gauge = 0.5 * float(fas["rail_centre_distance_m"])
-        d_f = float(rail_c["foot_depth_m"])
         bf2 = float(rail_c["foot_width_m"]) ** 2 / 12.0
-        t_half = 0.5 * float(slab_c["thickness_m"])
         for i, x in enumerate(layout.rail_x):
             zone = layout.rail_zone[i]
             kind = lay["bridge_track"] if zone == "bridge" else lay["approach_track"]
@@ -456,49 +460,29 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                 xa_j, xb_j, da, db, _ = slab_elems[j]
                 Ls = xb_j - xa_j
                 xi = float(np.clip((x - xa_j) / Ls, 0.0, 1.0))
-                N = hermite_shape(xi, Ls)
-                seat = ("slab", da, db, N, xi)
+                seat = (da, db, xi, Ls)
             for r in range(2):
                 e_r = half_gauge if r == 0 else -half_gauge
                 rd = 5 * (r * n_rn + i)
                 kz, cz = props["pad_kz"][r, i], props["pad_cz"][r, i]
                 ky, cy = props["pad_ky"][r, i], props["pad_cy"][r, i]
+                k3, c3 = (kz, ky, kz * bf2), (cz, cy, cz * bf2)
                 if kind == "slab":
-                    _, da, db, N, xi = seat
-                    zd = [rd, da, da + 1, db, db + 1, da + 4, db + 4]
-                    zc = [1.0, -N[0], -N[1], -N[2], -N[3], -e_r * (1 - xi), -e_r * xi]
-                    yd = [rd + 2, rd + 4, da + 2, da + 3, db + 2, db + 3, da + 4, db + 4]
-                    yc = [1.0, d_f, -N[0], -N[1], -N[2], -N[3], t_half * (1 - xi), t_half * xi]
-                    rdofs = [rd + 4, da + 4, db + 4]
-                    rc = [1.0, -(1 - xi), -xi]
+                    da, db, xi, Ls = seat
+                    pads["slab"].append((rd, da, db, (xi, Ls, e_r), k3, c3))
                 elif kind == "ballasted":
                     sd = off["sleeper"] + 3 * sleeper_of_node[i]
-                    zd, zc = [rd, sd, sd + 2], [1.0, -1.0, -e_r]
-                    yd, yc = [rd + 2, rd + 4, sd + 1], [1.0, d_f, -1.0]
-                    rdofs, rc = [rd + 4, sd + 2], [1.0, -1.0]
+                    pads["ballasted"].append((rd, sd, -1, (0.0, 0.0, e_r), k3, c3))
                 else:  # rigid ground
-                    zd, zc = [rd], [1.0]
-                    yd, yc = [rd + 2, rd + 4], [1.0, d_f]
-                    rdofs, rc = [rd + 4], [1.0]
-                links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)], (kz, ky, kz * bf2),
-                                 (cz, cy, cz * bf2), "pad")
-        # ballast: sleeper -> two blocks, shear between blocks, blocks -> subgrade; one triple
-        # per block (sleeper-block, block-subgrade, block-next block), a zero row at the end
+                    pads["rigid"].append((rd, -1, -1, (0.0, 0.0, e_r), k3, c3))
+        # ballast (kernels._ballast_forces): per sleeper its DOFs, its blocks, whether the next
+        # sleeper is adjacent (shear springs between neighbouring blocks)
         ns = ballasted_nodes.size
-        for j in range(ns):
-            sd = off["sleeper"] + 3 * j
-            for side in range(2):
-                e_r = half_gauge if side == 0 else -half_gauge
-                bd = off["ballast"] + 2 * j + side
-                has_next = j + 1 < ns and ballasted_nodes[j + 1] == ballasted_nodes[j] + 1
-                links.add_triple(
-                    [([sd, sd + 2, bd], [1.0, e_r, -1.0]), ([bd], [1.0]),
-                     ([bd, bd + 2], [1.0, -1.0]) if has_next else ([], [])],
-                    (bal["ballast_kz_N_m"], bal["subgrade_k_N_m"],
-                     bal["shear_k_N_m"] if has_next else 0.0),
-                    (bal["ballast_cz_Ns_m"], bal["subgrade_c_Ns_m"],
-                     bal["shear_c_Ns_m"] if has_next else 0.0), "ballast")
-            links.add([sd + 1], [1.0], bal["ballast_ky_N_m"], bal["ballast_cy_Ns_m"], "ballast_y")
+        bal_sleeper = off["sleeper"] + 3 * np.arange(ns, dtype=np.int64)
+        bal_block = off["ballast"] + 2 * np.arange(ns, dtype=np.int64)
+        bal_next = np.zeros(ns, dtype=np.int64)
+        if ns > 1:
+            bal_next[:-1] = (np.diff(ballasted_nodes) == 1).astype(np.int64)
         # CA mortar (bridge) or foundation (slab on subgrade), per slab element
         b2 = float(slab_c["width_m"]) ** 2 / 12.0
         h_deck = float(g_c["deck_height_m"])
@@ -574,6 +558,10 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         Kf.append(red.K.ravel()); Cf.append(red.C.ravel()); Mi.append(minv.ravel())
     ptr, ldof, lcoef, lk, lc = links.arrays()
     tptr, tdof, tcoef, tk, tc = links.triple_arrays()
+    pad_all = pads["slab"] + pads["ballasted"] + pads["rigid"]
+    pad_int = lambda col: np.array([q[col] for q in pad_all], dtype=np.int64)  # noqa: E731
+    pad_flt = lambda col: (np.array([q[col] for q in pad_all], dtype=float).ravel()  # noqa: E731
+                           if pad_all else np.zeros(0))
     cat = lambda parts, dt=float: (np.concatenate(parts).astype(dt) if parts  # noqa: E731
                                    else np.zeros(0, dtype=dt))
     packed = StructurePacked(
@@ -590,6 +578,17 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         rail_dx=float(layout.rail_x[1] - layout.rail_x[0]), rail_n_nodes=int(n_rn),
         rail_dof0=np.array([0, 5 * n_rn], dtype=np.int64),
         tri_ptr=tptr, tri_dof=tdof, tri_coef=tcoef, tri_k=tk, tri_c=tc,
+        pad_rail=pad_int(0), pad_seat_a=pad_int(1), pad_seat_b=pad_int(2), pad_geom=pad_flt(3),
+        pad_k=pad_flt(4), pad_c=pad_flt(5),
+        pad_group=np.array([len(pads["slab"]), len(pads["ballasted"]), len(pads["rigid"])],
+                           dtype=np.int64),
+        pad_foot_depth=d_f, pad_seat_half_thickness=t_half,
+        bal_sleeper=bal_sleeper, bal_block=bal_block, bal_next=bal_next,
+        bal_k=np.array([bal["ballast_kz_N_m"], bal["subgrade_k_N_m"], bal["shear_k_N_m"],
+                        bal["ballast_ky_N_m"]], dtype=float),
+        bal_c=np.array([bal["ballast_cz_Ns_m"], bal["subgrade_c_Ns_m"], bal["shear_c_Ns_m"],
+                        bal["ballast_cy_Ns_m"]], dtype=float),
+        bal_half_gauge=half_gauge,
     )
     info = dict(off, n_diag=n_diag, n_dof=n_dof, span_dof0=span_dof0, n_piers=n_piers,
                 n_sleepers=int(ballasted_nodes.size), n_rail_nodes=n_rn,
@@ -644,6 +643,12 @@ def assemble_matrices(packed: StructurePacked):
         ct = (coef * packed.tri_c[3 * t:3 * t + 3]) @ coef.T
         rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
         kv.append(kt.ravel()); cv.append(ct.ravel())
+    # rail pads and ballast: the generic three-row forms (the kernels compute them in place)
+    for dof, coef, k3, c3 in (*pad_link_rows(packed), *ballast_link_rows(packed)):
+        kt = (coef * k3) @ coef.T
+        ct = (coef * c3) @ coef.T
+        rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
+        kv.append(kt.ravel()); cv.append(ct.ravel())
     # spans
     mrows, mcols, mv = [np.arange(packed.n_diag)], [np.arange(packed.n_diag)], []
     with np.errstate(divide="ignore"):
@@ -665,6 +670,62 @@ def assemble_matrices(packed: StructurePacked):
     M = sparse.coo_matrix((np.concatenate(mv), (np.concatenate(mrows), np.concatenate(mcols))),
                           shape=(n, n)).tocsr()
     return M, K, C
+
+
+def pad_link_rows(packed: StructurePacked):
+    """Yield (dofs, coef (n, 3), k3, c3) of every rail pad: the vertical, lateral and roll
+    relative displacements as linear forms of the DOFs (the paper's eq. 22 with the seat's shape
+    functions), from the compact pad arrays. Reference for :func:`kernels._pad_forces`."""
+    d_f = float(packed.pad_foot_depth)
+    t_half = float(packed.pad_seat_half_thickness)
+    n_slab, n_ballast = int(packed.pad_group[0]), int(packed.pad_group[1])
+    for p in range(packed.pad_rail.size):
+        rd = int(packed.pad_rail[p])
+        xi, L, e = packed.pad_geom[3 * p:3 * p + 3]
+        rows = {rd: [1.0, 0.0, 0.0], rd + 2: [0.0, 1.0, 0.0], rd + 4: [0.0, d_f, 1.0]}
+        if p < n_slab:
+            da, db = int(packed.pad_seat_a[p]), int(packed.pad_seat_b[p])
+            N = hermite_shape(xi, L)
+            for q, n_q in zip((da, da + 1, db, db + 1), N):
+                rows.setdefault(q, [0.0, 0.0, 0.0])[0] -= n_q
+            for q, n_q in zip((da + 2, da + 3, db + 2, db + 3), N):
+                rows.setdefault(q, [0.0, 0.0, 0.0])[1] -= n_q
+            for q, w in ((da + 4, 1.0 - xi), (db + 4, xi)):
+                r = rows.setdefault(q, [0.0, 0.0, 0.0])
+                r[0] -= e * w
+                r[1] += t_half * w
+                r[2] -= w
+        elif p < n_slab + n_ballast:
+            sd = int(packed.pad_seat_a[p])
+            rows[sd] = [-1.0, 0.0, 0.0]
+            rows[sd + 1] = [0.0, -1.0, 0.0]
+            rows[sd + 2] = [-e, 0.0, -1.0]
+        dof = np.fromiter(rows, dtype=np.int64)
+        coef = np.array([rows[q] for q in rows])
+        yield dof, coef, packed.pad_k[3 * p:3 * p + 3], packed.pad_c[3 * p:3 * p + 3]
+
+
+def ballast_link_rows(packed: StructurePacked):
+    """Yield (dofs, coef (n, 3), k3, c3) of the ballasted track: per block the sleeper-block,
+    block-subgrade and block-next-block springs, per sleeper its lateral resistance (as a row
+    with one active direction). Reference for :func:`kernels._ballast_forces`."""
+    k, c, e0 = packed.bal_k, packed.bal_c, float(packed.bal_half_gauge)
+    for j in range(packed.bal_sleeper.size):
+        sd = int(packed.bal_sleeper[j])
+        for side in range(2):
+            e = e0 if side == 0 else -e0
+            bd = int(packed.bal_block[j]) + side
+            nxt = bool(packed.bal_next[j])
+            dof = np.array([sd, sd + 2, bd] + ([bd + 2] if nxt else []), dtype=np.int64)
+            coef = np.zeros((dof.size, 3))
+            coef[:3, 0] = [1.0, e, -1.0]
+            coef[2, 1] = 1.0
+            if nxt:
+                coef[2, 2], coef[3, 2] = 1.0, -1.0
+            yield (dof, coef, np.array([k[0], k[1], k[2] if nxt else 0.0]),
+                   np.array([c[0], c[1], c[2] if nxt else 0.0]))
+        yield (np.array([sd + 1], dtype=np.int64), np.array([[1.0, 0.0, 0.0]]),
+               np.array([k[3], 0.0, 0.0]), np.array([c[3], 0.0, 0.0]))
 
 
 def _span_mass_from_inverse(Minv: np.ndarray) -> np.ndarray:

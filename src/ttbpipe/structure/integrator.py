@@ -82,8 +82,13 @@ def stable_time_step(model, safety: float = 0.9, n_modes: int = 6) -> dict:
     A = (Linv @ K @ Linv.T).tocsr()
     k = min(n_modes, free.size - 2)
     # loose tol: the top eigenvalues are clustered (identical rail bays), so tight vector
-    # convergence costs thousands of iterations; the eigenvalue error is ~tol^2 (symmetric)
-    w2, vec = splinalg.eigsh(A, k=k, which="LA", tol=1e-5)
+    # convergence costs thousands of iterations. For a symmetric matrix each Ritz value is within
+    # the residual tol*|lambda| of an eigenvalue (and its vector's Rayleigh quotient within
+    # ~tol^2): tol 1e-3 bounds omega to 0.05 %, far inside the 0.9 safety factor. Measured on
+    # the reference case: tol 1e-3 0.03 s vs 1e-5 0.55 s, top four omega identical to 1e-10,
+    # limit unchanged (docs/performance.md). Fixed start vector: deterministic run time/result.
+    v0 = np.random.default_rng(20261121).standard_normal(A.shape[0])
+    w2, vec = splinalg.eigsh(A, k=k, which="LA", tol=1e-3, v0=v0)
     best = None
     for i in range(w2.size):
         w = np.sqrt(max(w2[i], 0.0))

@@ -8,8 +8,9 @@ element (no global matrix in the time loop):
   linear torsion, per-element E*I and G*K (paper eqs. 12-13);
 * links: every discrete or lumped spring-damper (sleepers and ballast, bearings, piers) as a
   relative displacement d = sum_j coef_j u_{dof_j}, force k d + c d', and the transposed scatter
-  (paper eqs. 22-27 with the shape functions folded into coef); rail pads and CA quadrature points
-  as link *triples* (vertical, lateral, roll over one shared DOF list);
+  (paper eqs. 22-27 with the shape functions folded into coef); CA quadrature points as link
+  *triples* (vertical, lateral, roll over one shared DOF list); rail pads and the ballasted
+  track in compact forms (:func:`_pad_forces`, :func:`_ballast_forces`);
 * girder spans: a dense reduced block per span (Craig-Bampton boundary + fixed-interface modal
   coordinates) with its own K, Rayleigh C (eq. 18) and the inverse of its mass block.
 
@@ -31,11 +32,20 @@ StructurePacked = namedtuple("StructurePacked", [
     "span_dof0", "span_n", "span_mat0", "span_K", "span_C", "span_Minv", "span_scratch",
     "n_rails", "rail_x0", "rail_dx", "rail_n_nodes", "rail_dof0",
     "tri_ptr", "tri_dof", "tri_coef", "tri_k", "tri_c",
+    "pad_rail", "pad_seat_a", "pad_seat_b", "pad_geom", "pad_k", "pad_c", "pad_group",
+    "pad_foot_depth", "pad_seat_half_thickness",
+    "bal_sleeper", "bal_block", "bal_next", "bal_k", "bal_c", "bal_half_gauge",
 ])
-# Link triples (added after the interface was published): default to none, so that code building
-# a StructurePacked by keyword without them (e.g. an empty rigid structure) keeps working.
-StructurePacked.__new__.__defaults__ = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64),
-                                        np.zeros(0), np.zeros(0), np.zeros(0))
+# Link triples and rail pads (added after the interface was published): default to none, so that
+# code building a StructurePacked by keyword without them (e.g. an empty rigid structure) keeps
+# working.
+StructurePacked.__new__.__defaults__ = (
+    np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0),
+    np.zeros(0),
+    np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
+    np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(3, dtype=np.int64), 0.0, 0.0,
+    np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
+    np.zeros(4), np.zeros(4), 0.0)
 
 
 @njit(cache=True)
@@ -98,7 +108,8 @@ def _link_forces(packed, disp, vel, force):
 
 @njit(cache=True)
 def _triple_forces(packed, disp, vel, force):
-    """Subtract the forces of every link triple (rail pads, CA quadrature points).
+    """Subtract the forces of every link triple (CA quadrature points; rail pads and ballast have
+    compact kernels since issue 9).
 
     A triple is three links (vertical, lateral, roll) over one shared DOF list: relative
     displacements d_r = sum_j coef[j, r] u[dof_j] (r = 0, 1, 2), forces p_r = k_r d_r + c_r d'_r,
@@ -138,6 +149,146 @@ def _triple_forces(packed, disp, vel, force):
 
 
 @njit(cache=True)
+def _pad_forces(packed, disp, vel, force):
+    """Subtract the forces of every rail pad (fastener): vertical, lateral and roll spring-dampers
+    between a rail node and its seat (paper eq. 22).
+
+    Pads are stored compactly (issue 9, docs/performance.md: half the time of the generic link
+    triples, which read 6-13 (DOF, 3 coefficients) entries per pad): rail node first DOF ``rd``
+    (z, dz/dx, y, dy/dx, roll), seat DOFs, geometry ``pad_geom[3p:3p+3]`` = (xi, L, e) and
+    k, c per direction (vertical, lateral at the rail foot, roll). ``pad_group`` = numbers of
+    pads on (slab, ballasted sleepers, rigid ground), stored in that order. Relative motions,
+    d_f = ``pad_foot_depth`` (shear centre to foot), t = ``pad_seat_half_thickness``:
+
+    * slab seat in the slab element (nodes a, b; Hermite N_i(xi, L), roll linear, rail at
+      lateral offset e): d_z = z_r - N.w_slab - e r_s, d_y = y_r + d_f roll_r - N.v_slab + t r_s,
+      d_roll = roll_r - r_s with r_s = (1 - xi) roll_a + xi roll_b;
+    * sleeper (z, y, roll at ``seat_a``): d_z = z_r - z_s - e roll_s, d_y = y_r + d_f roll_r - y_s,
+      d_roll = roll_r - roll_s;
+    * rigid ground: d = (z_r, y_r + d_f roll_r, roll_r).
+
+    Force p = k d + c d' per direction; the generalised forces are the transpose (virtual work).
+    Same physics as the link-triple form (``assemble_matrices`` builds K, C from that form; the
+    kernel test compares them).
+    """
+    d_f = packed.pad_foot_depth
+    t_half = packed.pad_seat_half_thickness
+    n_slab = packed.pad_group[0]
+    n_ballast = packed.pad_group[1]
+    n_pad = packed.pad_rail.shape[0]
+    rail = packed.pad_rail
+    seat_a = packed.pad_seat_a
+    seat_b = packed.pad_seat_b
+    geom = packed.pad_geom
+    kk = packed.pad_k
+    cc = packed.pad_c
+    for p in range(n_pad):
+        rd = rail[p]
+        e = geom[3 * p + 2]
+        dz = disp[rd]
+        dy = disp[rd + 2] + d_f * disp[rd + 4]
+        dr = disp[rd + 4]
+        vz = vel[rd]
+        vy = vel[rd + 2] + d_f * vel[rd + 4]
+        vr = vel[rd + 4]
+        da = seat_a[p]
+        db = seat_b[p]
+        sd = da
+        xi = 0.0
+        wa = 1.0
+        n1 = n2 = n3 = n4 = 0.0
+        if p < n_slab:
+            xi = geom[3 * p]
+            L = geom[3 * p + 1]
+            xi2 = xi * xi
+            xi3 = xi2 * xi
+            n1 = 1.0 - 3.0 * xi2 + 2.0 * xi3
+            n2 = L * (xi - 2.0 * xi2 + xi3)
+            n3 = 3.0 * xi2 - 2.0 * xi3
+            n4 = L * (xi3 - xi2)
+            wa = 1.0 - xi
+            rs = wa * disp[da + 4] + xi * disp[db + 4]
+            vrs = wa * vel[da + 4] + xi * vel[db + 4]
+            dz -= n1 * disp[da] + n2 * disp[da + 1] + n3 * disp[db] + n4 * disp[db + 1] + e * rs
+            dy += t_half * rs - (n1 * disp[da + 2] + n2 * disp[da + 3] + n3 * disp[db + 2]
+                                 + n4 * disp[db + 3])
+            dr -= rs
+            vz -= n1 * vel[da] + n2 * vel[da + 1] + n3 * vel[db] + n4 * vel[db + 1] + e * vrs
+            vy += t_half * vrs - (n1 * vel[da + 2] + n2 * vel[da + 3] + n3 * vel[db + 2]
+                                  + n4 * vel[db + 3])
+            vr -= vrs
+        elif p < n_slab + n_ballast:
+            dz -= disp[sd] + e * disp[sd + 2]
+            dy -= disp[sd + 1]
+            dr -= disp[sd + 2]
+            vz -= vel[sd] + e * vel[sd + 2]
+            vy -= vel[sd + 1]
+            vr -= vel[sd + 2]
+        pz = kk[3 * p] * dz + cc[3 * p] * vz
+        py = kk[3 * p + 1] * dy + cc[3 * p + 1] * vy
+        pr = kk[3 * p + 2] * dr + cc[3 * p + 2] * vr
+        force[rd] -= pz
+        force[rd + 2] -= py
+        force[rd + 4] -= d_f * py + pr
+        if p < n_slab:
+            force[da] += n1 * pz
+            force[da + 1] += n2 * pz
+            force[db] += n3 * pz
+            force[db + 1] += n4 * pz
+            force[da + 2] += n1 * py
+            force[da + 3] += n2 * py
+            force[db + 2] += n3 * py
+            force[db + 3] += n4 * py
+            q = e * pz - t_half * py + pr
+            force[da + 4] += wa * q
+            force[db + 4] += xi * q
+        elif p < n_slab + n_ballast:
+            force[sd] += pz
+            force[sd + 1] += py
+            force[sd + 2] += e * pz + pr
+
+
+@njit(cache=True)
+def _ballast_forces(packed, disp, vel, force):
+    """Subtract the forces of the ballasted track under the rails (Zhai's model; paper 2.1 (2)).
+
+    Per sleeper j (z, y, roll at ``bal_sleeper[j]``) two ballast blocks (z at ``bal_block[j]``
+    + side, side 0 under the left rail seat at e = +``bal_half_gauge``, side 1 at -e): sleeper ->
+    block spring-damper on z_s + e roll_s - z_b (``bal_k[0]``, ``bal_c[0]``), block -> subgrade on
+    z_b (index 1), shear between the block and the same side's block of the next sleeper on
+    z_b - z_b,next when ``bal_next[j]`` (index 2), and the sleeper's lateral resistance on y_s
+    (index 3). Same physics as the former link triples (issue 9 compact form;
+    ``assembly.ballast_link_rows`` gives the generic rows the reference matrices use).
+    """
+    e = packed.bal_half_gauge
+    kz, ksub, ksh, ky = packed.bal_k[0], packed.bal_k[1], packed.bal_k[2], packed.bal_k[3]
+    cz, csub, csh, cy = packed.bal_c[0], packed.bal_c[1], packed.bal_c[2], packed.bal_c[3]
+    sleeper = packed.bal_sleeper
+    block = packed.bal_block
+    nxt = packed.bal_next
+    for j in range(sleeper.shape[0]):
+        sd = sleeper[j]
+        zs = disp[sd]
+        rs = disp[sd + 2]
+        vzs = vel[sd]
+        vrs = vel[sd + 2]
+        force[sd + 1] -= ky * disp[sd + 1] + cy * vel[sd + 1]
+        for side in range(2):
+            es = e if side == 0 else -e
+            bd = block[j] + side
+            zb = disp[bd]
+            vb = vel[bd]
+            p0 = kz * (zs + es * rs - zb) + cz * (vzs + es * vrs - vb)
+            force[sd] -= p0
+            force[sd + 2] -= es * p0
+            force[bd] += p0 - (ksub * zb + csub * vb)
+            if nxt[j] != 0:
+                p2 = ksh * (zb - disp[bd + 2]) + csh * (vb - vel[bd + 2])
+                force[bd] -= p2
+                force[bd + 2] += p2
+
+
+@njit(cache=True)
 def _structure_accelerations(packed, disp, vel, nodal_force, acc_out):
     """acc_out = M^-1 (nodal_force - K disp - C vel) for the whole structure.
 
@@ -149,6 +300,8 @@ def _structure_accelerations(packed, disp, vel, nodal_force, acc_out):
         acc_out[i] = nodal_force[i]
     _beam_forces(packed, disp, vel, acc_out)
     _link_forces(packed, disp, vel, acc_out)
+    _pad_forces(packed, disp, vel, acc_out)
+    _ballast_forces(packed, disp, vel, acc_out)
     _triple_forces(packed, disp, vel, acc_out)
     for i in range(packed.n_diag):
         acc_out[i] *= packed.inv_mass[i]

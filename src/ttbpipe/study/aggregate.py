@@ -77,7 +77,7 @@ def rst_to_html(rst: str, title: str) -> str:
     """reStructuredText -> standalone HTML page (docutils)."""
     from docutils.core import publish_string
 
-    return publish_string(rst, writer_name="html",
+    return publish_string(rst, writer="html",
                           settings_overrides={"embed_stylesheet": True, "report_level": 3,
                                               "title": title}).decode()
 
@@ -115,6 +115,101 @@ def summary_intro(extremes: pd.DataFrame, design: pd.DataFrame, study: str) -> s
             "P(max index > limit) per scenario with two-sided confidence intervals "
             "(TIPM-weighted scenarios use an effective sample size); method: "
             "docs/reliability.md, study design: docs/studies.md.")
+
+
+def _p_text(p: float) -> str:
+    return "0" if p == 0 else (f"{p:.3g}" if p >= 1e-3 else f"{p:.1e}")
+
+
+def compact_first_page_rst(assessment: pd.DataFrame, *, study: str, intro: str,
+                           details: str = "0. Summary") -> str:
+    """Short first page for the report's main page: limits exceeded, a limit x scenario matrix
+    of P(exceed) with its interval, and whether the samples sufficed (grades, sources and the
+    full verdicts are on the full page, :func:`ttbpipe.stats.report.first_page_rst`)."""
+    ok = ~assessment["status"].str.startswith("not evaluated")
+    evaluated = assessment[ok & (assessment["category"] == "limit")]
+    level = f"{100 * float(evaluated['confidence_level'].iloc[0]):g} %" if len(evaluated) else "95 %"
+    title = f"Reliability summary: {study}"
+    out = [title, "=" * len(title), "", intro, ""]
+    out += ["Limits exceeded", "-" * 15, ""]
+    exceeded = evaluated[evaluated["n_exceed"] > 0].sort_values(["probability"], ascending=False)
+    if exceeded.empty:
+        out.append(f"**No sample exceeded any limit** ({evaluated['limit'].nunique()} limits, "
+                   f"{evaluated['scenario'].nunique()} scenarios).")
+    for _, r in exceeded.iterrows():
+        out.append(f"- **{r['description']} > {r['threshold']}**, scenario ``{r['scenario']}``: "
+                   f"P = {_p_text(r['probability'])}, {level} CI [{_p_text(r['ci_low'])}, "
+                   f"{_p_text(r['ci_high'])}] ({int(r['n_exceed'])} of {int(r['n_samples'])} samples)")
+    heading = f"P(exceed) per limit and scenario ({level} CI)"
+    out += ["", heading, "-" * len(heading), ""]
+    scenarios = sorted(evaluated["scenario"].unique())
+    out += [".. list-table::", "   :header-rows: 1", "",
+            "   * - limit"] + [f"     - {s}" for s in scenarios]
+    for name, block in evaluated.groupby("limit", sort=False):
+        first = block.iloc[0]
+        out.append(f"   * - {name} > {first['threshold']}")
+        by = block.set_index("scenario")
+        for s in scenarios:
+            if s not in by.index:
+                out.append("     - n/a")
+                continue
+            r = by.loc[s]
+            cell = (f"0 (< {_p_text(r['upper_one_sided'])})" if r["n_exceed"] == 0 else
+                    f"{_p_text(r['probability'])} [{_p_text(r['ci_low'])}, {_p_text(r['ci_high'])}]")
+            mark = "" if r["sufficient"] else " \\*"
+            out.append(f"     - {cell}{mark}")
+    out += ["", "0 (< u): no exceeding sample, one-sided upper bound u. "
+            "\\* the number of samples did not suffice.", ""]
+    out += ["Did the number of samples suffice?", "-" * 34, ""]
+    short = evaluated[~evaluated["sufficient"].astype(bool)]
+    if short.empty:
+        out.append(f"**Yes**, for all {len(evaluated)} limit-scenario pairs.")
+    else:
+        need = short["status"].str.extract(r"about (\d+) effective samples")[0].dropna().astype(int)
+        out.append(f"**No** for {len(short)} of {len(evaluated)} limit-scenario pairs"
+                   + (f"; the criterion (limits.sufficiency) needs up to about {need.max()} "
+                      "effective samples per scenario" if len(need) else "") + ".")
+    skipped = assessment[~ok]
+    if len(skipped):
+        out += ["", f"Not evaluated: {', '.join(sorted(skipped['limit'].unique()))} (see the "
+                "full summary)."]
+    out += ["", f"Grades, sources and verdicts per limit: *{details}*."]
+    return "\n".join(out) + "\n"
+
+
+def main_page_rst(assessment: pd.DataFrame, *, details: str = "0. Summary") -> str:
+    """A few lines for the report's main page (which must stay short to display whole):
+    the limits exceeded with P and interval, and whether the number of samples sufficed."""
+    ok = ~assessment["status"].str.startswith("not evaluated")
+    evaluated = assessment[ok & (assessment["category"] == "limit")]
+    level = f"{100 * float(evaluated['confidence_level'].iloc[0]):g} %" if len(evaluated) else "95 %"
+    out = []
+    exceeded = evaluated[evaluated["n_exceed"] > 0].sort_values("probability", ascending=False)
+    if exceeded.empty:
+        bound = evaluated.groupby("scenario")["upper_one_sided"].max()
+        out.append(f"**Limits exceeded: none.** No sample of any scenario exceeded any of the "
+                   f"{evaluated['limit'].nunique()} safety and comfort limits (one-sided {level} "
+                   "upper bounds of P(exceed): " + ", ".join(
+                       f"{s} < {_p_text(b)}" for s, b in bound.items()) + ").")
+    else:
+        out.append(f"**Limits exceeded** (P(max index > limit), {level} CI):")
+        out.append("")
+        for _, r in exceeded.iterrows():
+            out.append(f"- **{r['description']} > {r['threshold']}**, scenario ``{r['scenario']}``: "
+                       f"P = {_p_text(r['probability'])} [{_p_text(r['ci_low'])}, "
+                       f"{_p_text(r['ci_high'])}] ({int(r['n_exceed'])} of {int(r['n_samples'])})")
+    out.append("")
+    short = evaluated[~evaluated["sufficient"].astype(bool)]
+    if short.empty:
+        out.append(f"**Did the samples suffice? Yes**, for all {len(evaluated)} limit-scenario pairs.")
+    else:
+        need = short["status"].str.extract(r"about (\d+) effective samples")[0].dropna().astype(int)
+        out.append(f"**Did the samples suffice? No**, for {len(short)} of {len(evaluated)} "
+                   "limit-scenario pairs" + (f": the criterion (limits.sufficiency) needs up to "
+                                             f"about {need.max()} effective samples per scenario"
+                                             if len(need) else "") + ".")
+    out += ["", f"Table per limit and scenario, grades, sources: category *{details}*."]
+    return "\n".join(out) + "\n"
 
 
 def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
@@ -173,11 +268,16 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
                                                config=config, kind="study_table1_history_std")
 
     # report pages
-    rst = first_page_rst(table, title="Reliability summary", study=study,
-                         intro=summary_intro(extremes, design, study))
-    written["summary_rst"] = io.write_text(rst, out / "summary.rst")
-    written["summary_html"] = io.write_text(rst_to_html(rst, f"Reliability summary: {study}"),
-                                            out / "report" / "summary.html")
+    intro = summary_intro(extremes, design, study)
+    rst = first_page_rst(table, title="Reliability summary", study=study, intro=" ")
+    written["summary_rst"] = io.write_text(main_page_rst(table), out / "summary.rst")
+    # summary.rst: a few lines for the report's main page; summary.html: the limit x scenario
+    # matrix, then the full first page of ttbpipe.stats.report
+    compact = compact_first_page_rst(table, study=study, intro=intro, details="Details below")
+    full = rst.split("\n", 3)[3]   # without its title: the compact page has one
+    written["summary_html"] = io.write_text(
+        rst_to_html(compact + "\nDetails\n=======\n\n" + full, f"Reliability summary: {study}"),
+        out / "report" / "summary.html")
     shown = table[["scenario", "limit", "threshold", "n_samples", "n_exceed", "probability",
                    "ci_low", "ci_high", "sufficient", "status", "source"]
                   ] if "probability" in table else table
@@ -209,6 +309,24 @@ def _clear(folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
 
 
+def _near(threshold: float | None, largest: float, ratio: float = 2.0) -> float | None:
+    """The limit, when drawing it keeps the data readable (within ``ratio`` of the largest
+    value); else None and the caller names it in the title."""
+    if threshold is None or not np.isfinite(largest) or threshold <= ratio * largest:
+        return threshold
+    return None
+
+
+def _off_scale_note(ax, column: str, threshold: float | None, shown: float | None) -> None:
+    if threshold is not None and shown is None:
+        factor, unit = plots.display_scale(column)
+        unit = "" if unit in ("1", "-", "–") else f" {unit}"
+        title = ax.get_title()
+        ax.set_title((title + "; " if title else "") +
+                     f"limit {threshold * factor:.3g}{unit} far above the data, not drawn",
+                     fontsize=9)
+
+
 def _figures(extremes, stats, curves, groups, limits, context, root: Path) -> dict[str, Path]:
     import matplotlib.pyplot as plt
 
@@ -223,9 +341,11 @@ def _figures(extremes, stats, curves, groups, limits, context, root: Path) -> di
         plt.close(fig)
     for group, scenarios in groups.items():
         for column in _indices_present(extremes):
-            fig = plots.plot_extreme_pdfs(extremes, column, scenarios=scenarios,
-                                          threshold=thresholds.get(column))
+            largest = float(extremes.loc[extremes["scenario"].isin(scenarios), column].max())
+            shown = _near(thresholds.get(column), largest)
+            fig = plots.plot_extreme_pdfs(extremes, column, scenarios=scenarios, threshold=shown)
             fig.axes[0].set_title(f"{group} scenarios", fontsize=9)
+            _off_scale_note(fig.axes[0], column, thresholds.get(column), shown)
             written[f"pdf_{group}_{column}"] = io.save_figure(fig, root / "pdf" / f"{group}_{column}.png")
             plt.close(fig)
         for quantity in sorted({q for s, q in stats if s in scenarios}):
@@ -240,7 +360,9 @@ def _figures(extremes, stats, curves, groups, limits, context, root: Path) -> di
             if column in extremes.columns:
                 env = stats_aggregate.forecast_envelope(extremes[extremes["scenario"].isin(dated)],
                                                         column, scenarios=dated)
-                fig = plots.plot_forecast_envelope(env, threshold=thresholds.get(column))
+                shown = _near(thresholds.get(column), float(env["upper"].max()))
+                fig = plots.plot_forecast_envelope(env, threshold=shown)
+                _off_scale_note(fig.axes[0], column, thresholds.get(column), shown)
                 written[f"envelope_{column}"] = io.save_figure(fig, root / "envelope" / f"{column}.png")
                 plt.close(fig)
     return written

@@ -46,7 +46,7 @@ DESIGN_COLUMNS = ("scenario", "kind", "sample_index", "weight", "profile_index",
 DEFAULT_SCENARIOS: dict[str, dict[str, Any]] = {
     "irregularity": {"enabled": True, "single_excitation": True},
     "forecast": {"enabled": True, "level": 0.5, "horizons_months": None},
-    "fields": {"enabled": True, "conditions": ["C1", "C2", "C3", "C4"], "samples": 6},
+    "fields": {"enabled": True, "conditions": ["C1", "C2", "C3", "C4"], "samples": 10},
 }
 
 
@@ -161,7 +161,7 @@ def build_design(study: Mapping[str, Any], *, latest_campaign: str,
                                  f"tipm.forecast.levels {sorted(forecast_states['level'].unique())}")
             blocks.append(_rows(target, "forecast", block["sample_index"], block["weight"],
                                 block["profile_index"], "nominal", seed))
-    n_fields = int(sc["fields"].get("samples", 6))
+    n_fields = int(sc["fields"].get("samples", 10))
     for condition in labels["fields"]:
         if n_fields < 1:
             raise ValueError(f"study.scenarios.fields.samples must be >= 1, got {n_fields}")

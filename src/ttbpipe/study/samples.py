@@ -266,7 +266,10 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
         try:
             table, summary = run_coupled(case)
         except Exception as exc:
-            raise RuntimeError(f"sample ({row['scenario']}, {index}) failed: {exc}") from exc
+            source = (f" (irregularity profile {row['profile_index']} of {profiles[kind]}, "
+                      f"shifted to start {irr_cfg['lead_in_m']} m behind x = 0)"
+                      if kind in profiles else "")
+            raise RuntimeError(f"sample ({row['scenario']}, {index}){source} failed: {exc}") from exc
     n_spans = len({m.group(1) for c in table.columns
                    if (m := re.match(r"girder_span(\d+)_mid_z_acc_m_s2$", c))}) or 1
     keys = {"sample_index": index, "scenario": str(row["scenario"]), "weight": float(row["weight"]),

@@ -1,0 +1,194 @@
+"""Batch runner of the study stage (ttbpipe.study.samples / batch; docs/studies.md).
+
+Real coupled runs on a tiny study (one 32 m span, one car, 15 m of run) so that the file stays
+at a few tens of seconds. What is checked and against what:
+
+* results do not depend on the batch size or on the executor (local loop vs a Dask LocalCluster):
+  exact equality of every extremes and time-history value (the project's determinism rule,
+  docs/dev/HELPER_BRIEF.md; the runs are deterministic floating-point programs);
+* an exception in the middle of a batch leaves no file, and a rerun redoes only the missing batch;
+* the extremes are the documented reductions of the run (docs/results_schema.md mapping);
+* the deck-acceleration low-pass (EN 1990 A2 A2.4.4.2.1, 30 Hz) against the Butterworth
+  magnitude response |H(f)|^2 = 1/(1 + (f/fc)^8) of the forward-backward 4th-order filter;
+* the fields scenarios' factors equal the fields stage's table (same seeds).
+"""
+
+import copy
+import os
+
+import numpy as np
+import pandas as pd
+import pytest
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+from ttbpipe.fields import load_field_factors, sample_study  # noqa: E402
+from ttbpipe.io import read_provenance  # noqa: E402
+from ttbpipe.stats.aggregate import read_extremes  # noqa: E402
+from ttbpipe.study import samples as study_samples  # noqa: E402
+from ttbpipe.study.batch import batch_paths, simulate_design  # noqa: E402
+from ttbpipe.study.design import build_design  # noqa: E402
+
+FIELDS = {
+    "method": "kle", "kernel": "exponential", "correlation_length_m": 10.0,
+    "variance_fraction": 0.9, "geometry": {"source": "structure"},
+    "groups": {g: {"enabled": True, "distribution": "normal", "cov": 0.1,
+                   "correlation": [[1.0, 0.7, 0.7, 0.7], [0.7, 1.0, 0.8, 0.8],
+                                   [0.7, 0.8, 1.0, 0.9], [0.7, 0.8, 0.9, 1.0]]}
+               for g in ("C1", "C2", "C3", "C4")},
+}
+CONFIG = {
+    "study": {"name": "tiny", "seed": 5,
+              "scenarios": {"irregularity": {"enabled": False}, "forecast": {"enabled": False},
+                            "fields": {"conditions": ["C2"], "samples": 3}}},
+    "structure": {"layout": {"approach_length_m": 30.0, "spans_m": [32.0],
+                             "approach_track": "ballasted", "bridge_track": "slab"}},
+    "simulation": {"train": {"composition": ["trailer"]}, "end_x_m": 40.0, "batch_size": 2},
+    "fields": FIELDS,
+}
+
+
+def tiny_design(config=CONFIG):
+    return build_design(config["study"], latest_campaign="2025-12-15", horizons_months=[])
+
+
+def read_all(root, design, batch_size):
+    from ttbpipe.study.design import batches
+
+    ext, hist = [], []
+    for b in batches(design, batch_size):
+        e, h = batch_paths(str(root), *b)
+        ext.append(e)
+        hist.append(pd.read_parquet(h))
+    extremes = read_extremes(ext).sort_values(["scenario", "sample_index"]).reset_index(drop=True)
+    histories = pd.concat(hist).sort_values(["scenario", "sample_index", "position_m"],
+                                            kind="stable").reset_index(drop=True)
+    return extremes, histories
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The tiny design simulated with batches of 2, locally."""
+    root = tmp_path_factory.mktemp("batches_2")
+    design = tiny_design()
+    ran = simulate_design(design, CONFIG, {}, str(root), batch_size=2, executor="local")
+    assert ran == [("C2", 0, 1), ("C2", 2, 2)]
+    return design, root, *read_all(root, design, 2)
+
+
+def test_extremes_follow_the_documented_mapping(reference):
+    design, root, extremes, histories = reference
+    assert len(extremes) == 3 and set(extremes["scenario"]) == {"C2"}
+    for direction in ("vertical", "lateral"):
+        per_car = [c for c in extremes.columns if c.startswith(f"sperling_{direction}_car")]
+        assert per_car == [f"sperling_{direction}_car1"]
+        np.testing.assert_array_equal(extremes[f"sperling_{direction}"], extremes[per_car[0]])
+    # the deck maxima are the largest span maxima; the grid is shared by every sample
+    np.testing.assert_array_equal(extremes["max_deck_vertical_acc_m_s2"],
+                                  extremes["max_span1_vertical_acc_m_s2"])
+    grids = [g["position_m"].to_numpy() for _, g in histories.groupby(["scenario", "sample_index"])]
+    assert all(np.array_equal(grids[0], g) for g in grids)
+    assert (extremes["train_speed_m_s"] == 300 / 3.6).all()
+    # the C2 samples differ from one another (random pads), the design seeds are recorded
+    assert extremes.loc[extremes["scenario"] == "C2", "max_wheel_vertical_force_N"].nunique() == 3
+    assert list(extremes["seed_entropy"]) == list(design.sort_values(["scenario", "sample_index"])["seed_entropy"])
+    meta = read_provenance(batch_paths(str(root), "C2", 0, 1)[0])
+    assert meta["samples"] == [0, 1]
+
+
+def test_results_do_not_depend_on_the_batch_size(reference, tmp_path):
+    design, _, extremes, histories = reference
+    simulate_design(design, CONFIG, {}, str(tmp_path), batch_size=3, executor="local")
+    e3, h3 = read_all(tmp_path, design, 3)
+    pd.testing.assert_frame_equal(extremes, e3, check_exact=True)
+    pd.testing.assert_frame_equal(histories, h3, check_exact=True)
+
+
+def test_dask_local_cluster_gives_identical_results(reference, tmp_path):
+    design, _, extremes, histories = reference
+    config = copy.deepcopy(CONFIG)
+    config["simulation"]["dask"] = {"local_workers": 2}
+    os.environ.pop("TTBPIPE_DASK_SCHEDULER", None)
+    simulate_design(design, config, {}, str(tmp_path), batch_size=4, executor="dask")
+    e4, h4 = read_all(tmp_path, design, 4)
+    pd.testing.assert_frame_equal(extremes, e4, check_exact=True)
+    pd.testing.assert_frame_equal(histories, h4, check_exact=True)
+
+
+def test_interrupted_batch_writes_nothing_and_rerun_does_only_the_missing(reference, tmp_path):
+    design, _, extremes, _ = reference
+    c2 = design
+
+    def failing(row, **kwargs):
+        if int(row["sample_index"]) == 2:
+            raise KeyboardInterrupt("simulated kill in the middle of a batch")
+        return study_samples.run_sample(row, **kwargs)
+
+    with pytest.raises(KeyboardInterrupt):
+        simulate_design(c2, CONFIG, {}, str(tmp_path), batch_size=2, executor="local",
+                        runner=failing)
+    done = batch_paths(str(tmp_path), "C2", 0, 1)
+    assert all(os.path.isfile(p) for p in done)
+    files = sorted(p.name for p in (tmp_path / "C2").iterdir())
+    assert files == ["extremes_00000-00001.parquet", "histories_00000-00001.parquet"], files
+    stamp = [os.stat(p).st_mtime_ns for p in done]
+    ran = simulate_design(c2, CONFIG, {}, str(tmp_path), batch_size=2, executor="local")
+    assert ran == [("C2", 2, 2)]
+    assert [os.stat(p).st_mtime_ns for p in done] == stamp
+    e, _ = read_all(tmp_path, c2, 2)
+    pd.testing.assert_frame_equal(e, extremes[extremes["scenario"] == "C2"].reset_index(drop=True),
+                                  check_exact=True)
+
+
+def test_deck_lowpass_keeps_10_hz_and_removes_100_hz():
+    dt = 2e-3
+    t = np.arange(0, 4.0, dt)
+    signal = np.sin(2 * np.pi * 10 * t) + np.sin(2 * np.pi * 100 * t + 0.3)
+    peak = study_samples._lowpass_peak(signal, dt, 30.0)
+    # |H(10 Hz)|^2 = 0.99985, |H(100 Hz)|^2 = 6.5e-5 (filtfilt squares the magnitude); 1 %
+    assert peak == pytest.approx(1.0, abs=0.01)
+    assert np.max(np.abs(signal)) > 1.5
+
+
+def test_fields_condition_factors_equal_the_fields_stage(tmp_path):
+    structure = CONFIG["structure"]
+    table = tmp_path / "samples.parquet"
+    sample_study({"study": {"seed": 5}, "fields": FIELDS, "structure": structure}, table, n_samples=3)
+    for i in range(3):
+        stage = load_field_factors(table, i)
+        alone = study_samples.field_factors(FIELDS, structure, 5, "C2", i)
+        assert sorted(alone) == ["pad_cy", "pad_cz", "pad_ky", "pad_kz"]
+        for name, values in alone.items():
+            np.testing.assert_array_equal(values, stage[name])
+
+
+def test_aggregation_tables_report_pages_and_missing_samples(reference, tmp_path):
+    """Study outputs from the batch files; a forced exceedance (threshold below every sample:
+    P = 1 exactly, binomial k = N) appears on the first page; a missing batch is an error."""
+    from ttbpipe.study.aggregate import aggregate_study
+    from ttbpipe.study.design import batches
+
+    design, root, extremes, _ = reference
+    paths = [batch_paths(str(root), *b) for b in batches(design, 2)]
+    config = {**CONFIG, "limits": {"thresholds": {"derailment_coefficient": 1e-4}}}
+    out = aggregate_study([p[0] for p in paths], [p[1] for p in paths], design, config,
+                          out=tmp_path / "study")
+    table = pd.read_parquet(out["reliability"])
+    dc = table[table["limit"] == "derailment_coefficient"].iloc[0]
+    assert (dc["n_exceed"], dc["n_samples"], dc["probability"]) == (3, 3, 1.0)
+    main = (tmp_path / "study" / "summary.rst").read_text()
+    assert "derailment coefficient Q/P > 0.0001" in main and "P = 1 " in main
+    assert "Did the samples suffice? No" in main
+    pd.testing.assert_frame_equal(pd.read_parquet(out["extremes"]), extremes, check_dtype=False)
+    table1 = pd.read_parquet(out["table1"])
+    assert list(table1.columns) == ["index", "C2"]
+    expected = extremes["max_wheel_vertical_force_N"].std(ddof=1)   # equal weights: numpy ddof=1
+    got = table1.set_index("index").loc["max_wheel_vertical_force_N", "C2"]
+    assert got == pytest.approx(expected, rel=1e-12)
+    stats = pd.read_parquet(out["history"])
+    assert set(stats["quantity"]) >= {"girder_vertical_acc_m_s2", "wheel_lateral_force_N"}
+    for kind in ("convergence", "pdf", "history"):
+        assert list((tmp_path / "study" / "figures" / kind).glob("*.png")), kind
+    assert "<table" in (tmp_path / "study" / "report" / "summary.html").read_text()
+    with pytest.raises(ValueError, match="C2/2"):
+        aggregate_study([paths[0][0]], [paths[0][1]], design, config, out=tmp_path / "bad")

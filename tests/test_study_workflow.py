@@ -1,0 +1,101 @@
+"""The study stage under Snakemake: killing a run and rerunning it (issue 7).
+
+A tiny fields-only study (one 32 m span, one car, 10 m of run, 4 samples in batches of 1) in a
+scratch copy of the repository. Snakemake is interrupted (SIGINT to its process group, as Ctrl-C
+does) as soon as the first batch file exists; the rerun must finish without redoing the finished
+batches (their files keep their modification times), and no temporary or partial file may remain.
+The final extremes must equal those of an uninterrupted run of the same design in the package
+(exact equality: the runs are deterministic).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from test_workflow import _copy_repository
+
+TINY_STUDY = """\
+study:
+  name: tiny
+  seed: 3
+  scenarios:
+    irregularity: {enabled: false}
+    forecast: {enabled: false}
+    fields: {conditions: [C3], samples: 4}
+inspections:
+  synthetic: {enabled: true, length_km: 2.0, campaigns: 2}
+structure:
+  layout: {approach_length_m: 30.0, spans_m: [32.0], approach_track: ballasted, bridge_track: slab}
+simulation:
+  train: {composition: [trailer]}
+  end_x_m: 35.0
+  batch_size: 1
+fields:
+  variance_fraction: 0.9
+"""
+
+
+def _cmd(*args: str) -> list[str]:
+    return [sys.executable, "-m", "snakemake", *args, "--cores", "2", "--configfile", "tiny.yaml"]
+
+
+@pytest.mark.slow
+def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
+    _copy_repository(tmp_path)
+    (tmp_path / "tiny.yaml").write_text(TINY_STUDY)
+    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+    batches = tmp_path / "results" / "study" / "batches" / "C3"
+    proc = subprocess.Popen(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not list(batches.glob("extremes_*.parquet")):
+        if proc.poll() is not None:
+            pytest.fail("snakemake ended before the first batch:\n" + proc.stdout.read().decode()[-3000:])
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGINT)
+    proc.wait(timeout=60)
+    finished = {p.name: p.stat().st_mtime_ns for p in batches.glob("*.parquet")}
+    assert finished, "no batch finished before the interruption"
+    assert not (tmp_path / "results" / "study" / "extremes.parquet").exists(), \
+        "the run finished before it could be interrupted; the test shows nothing"
+    assert not [p for p in batches.iterdir() if p.name.startswith(".")], "temporary files left"
+
+    rerun = subprocess.run(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,
+                           capture_output=True, text=True)
+    assert rerun.returncode == 0, rerun.stdout[-3000:] + rerun.stderr[-3000:]
+    for name, stamp in finished.items():
+        assert (batches / name).stat().st_mtime_ns == stamp, f"{name} was redone"
+    log = rerun.stdout + rerun.stderr
+    ran = len(re.findall(r"(?m)^(?:local)?rule simulate_batch:", log))
+    n_done = sum(1 for n in finished if n.startswith("extremes_"))
+    assert ran == 4 - n_done, log[-3000:]
+    assert sorted(p.name for p in batches.iterdir()) == sorted(
+        [f"{k}_{i:05d}-{i:05d}.parquet" for i in range(4) for k in ("extremes", "histories")])
+
+    # the same samples simulated in one go by the package
+    import yaml
+
+    from ttbpipe.study.batch import simulate_design
+    from ttbpipe.study.design import build_design
+
+    config = yaml.safe_load((tmp_path / "config" / "config.yaml").read_text())
+    tiny = yaml.safe_load(TINY_STUDY)
+    for key in ("study", "structure", "simulation"):
+        config[key] = tiny[key]
+    config["fields"]["variance_fraction"] = 0.9
+    design = build_design(config["study"], latest_campaign="2024-01-15", horizons_months=[])
+    simulate_design(design, config, {}, str(tmp_path / "direct"), batch_size=4)
+    direct = pd.read_parquet(tmp_path / "direct" / "C3" / "extremes_00000-00003.parquet")
+    workflow = pd.read_parquet(tmp_path / "results" / "study" / "extremes.parquet")
+    pd.testing.assert_frame_equal(direct.reset_index(drop=True), workflow.reset_index(drop=True),
+                                  check_exact=True, check_dtype=False)
