@@ -32,6 +32,13 @@ inspections:
     start_date: "2024-01-15"
     interval_months: 1
     seed: 7
+study:
+  seed: 1
+  scenarios:
+    fields: {conditions: [C2], samples: 2}
+simulation:
+  end_x_m: 100.0
+  batch_size: 10
 """
 
 

@@ -254,8 +254,9 @@ def _batch_matrices(df: pd.DataFrame, path: Path, abscissa: str, quantities: lis
     """Yield (scenario, grid, sample_index, weights, {quantity: (n_samples, n_points)}) per scenario.
 
     Relies on the layout :func:`validate_histories` checked: rows of a sample contiguous, the
-    same grid for every sample of a scenario. No sort is needed: the moments and histograms do
-    not depend on the order of the samples.
+    same grid for every sample of a scenario. Samples come out sorted by ``sample_index``: the
+    callers add them one at a time in that order, so that floating-point round-off, and hence
+    the result, does not depend on how the samples were split into batch files.
     """
     codes, scenarios = pd.factorize(df["scenario"], sort=False)
     index = df["sample_index"].to_numpy()
@@ -269,7 +270,27 @@ def _batch_matrices(df: pd.DataFrame, path: Path, abscissa: str, quantities: lis
         first = np.flatnonzero(pick(starts))
         n_points = (len(index) if rows is None else rows.size) // first.size
         values = {q: pick(col).reshape(first.size, n_points) for q, col in columns.items()}
-        yield (str(scenario), pick(x)[:n_points], pick(index)[first], pick(weight)[first], values)
+        sample_index = pick(index)[first]
+        order = np.argsort(sample_index, kind="stable")
+        yield (str(scenario), pick(x)[:n_points], sample_index[order], pick(weight)[first][order],
+               {q: v[order] for q, v in values.items()})
+
+
+def _files_in_sample_order(paths: list[Path]) -> list[Path]:
+    """Order batch files by (first scenario, smallest sample index) they hold.
+
+    Batches are runs of consecutive sample indices, so this visits every scenario's samples in
+    index order whatever the batch size (a batch size changes only where the files split).
+    """
+    keys = []
+    for path in paths:
+        head = pq.read_table(path, columns=["scenario", "sample_index"]).to_pandas()
+        if head.empty:
+            keys.append(("", -1, str(path)))
+            continue
+        first = head.sort_values(["scenario", "sample_index"]).iloc[0]
+        keys.append((str(first["scenario"]), int(first["sample_index"]), str(path)))
+    return [Path(k[2]) for k in sorted(keys)]
 
 
 def _read_batch(path: Path, columns: list[str] | None, trace: AggregationTrace,
@@ -300,9 +321,10 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
     fewer quantities per call). ``quantiles=()`` skips the histograms and the second pass.
     Returns ``{(scenario, quantity): HistoryStatistics}``.
     """
-    paths = sorted(Path(p) for p in paths)
+    paths = [Path(p) for p in paths]
     if not paths:
         raise ResultsSchemaError("no time-history files given")
+    paths = _files_in_sample_order(paths)
     trace = trace if trace is not None else AggregationTrace()
     schema_names = pq.read_schema(paths[0]).names
     abscissa = history_abscissa(schema_names)
@@ -338,7 +360,8 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
                 key = (scenario, q)
                 if key not in moments:
                     moments[key] = WeightedMoments(grid.size)
-                moments[key].update(values[q], weights)
+                for i in range(index.size):  # one sample at a time, in index order (see above)
+                    moments[key].update(values[q][i:i + 1], weights[i:i + 1])
         del df
 
     state_mb = sum(m.n_points for m in moments.values()) * n_bins * 8 / 1e6
@@ -353,7 +376,8 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
         df = _read_batch(path, columns, trace, validate=False)
         for scenario, _, _, weights, values in _batch_matrices(df, path, abscissa, quantities):
             for q in quantities:
-                histograms[(scenario, q)].update(values[q], weights)
+                for i in range(weights.size):
+                    histograms[(scenario, q)].update(values[q][i:i + 1], weights[i:i + 1])
         del df
 
     trace.state_nbytes = sum(m.nbytes for m in moments.values()) + sum(
