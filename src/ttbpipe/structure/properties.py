@@ -128,12 +128,20 @@ BALLASTED = {
     "subgrade_c_Ns_m": 3.1e4,
 }
 
-#: Slab track on subgrade: the same slab on a distributed foundation (CA on a rigid concrete base).
+#: Slab track on subgrade: the same slab on a distributed foundation per metre of track, the CA
+#: mortar in series with the subgrade under the concrete base (the base's own bending stiffness and
+#: mass are neglected: a softer, conservative foundation; docs/structure.md section 1):
+#: CA 3.0e9 N/m2 (Zeng 2014, as on the bridge) [V]; subgrade modulus K30 = 190 MPa/m, the minimum
+#: for the subgrade bed surface layer under ballastless track (TB 10621-2014) [M], times the width
+#: of the CRTS II hydraulically bonded base on subgrade, 2.95 m [M] -> 5.6e8 N/m2 [C];
+#: series 1 / (1/3.0e9 + 1/5.6e8) = 4.72e8 N/m2 [C]. Lateral: taken equal to the vertical [M,
+#: as the CA's]. Damping: Zhai's subgrade damping 3.1e4 N s/m per ballast block (BALLASTED) [M]
+#: spread over the 0.63 m seat pitch, two blocks per seat: 2 x 3.1e4 / 0.63 = 9.84e4 N s/m2 [C].
 SLAB_ON_SUBGRADE = {
-    "foundation_kz_N_m2": 3.0e9,
-    "foundation_cz_Ns_m2": 1.66e5,
-    "foundation_ky_N_m2": 3.0e9,
-    "foundation_cy_Ns_m2": 1.66e5,
+    "foundation_kz_N_m2": 4.72e8,
+    "foundation_cz_Ns_m2": 9.84e4,
+    "foundation_ky_N_m2": 4.72e8,
+    "foundation_cy_Ns_m2": 9.84e4,
 }
 
 #: Layout: approach, spans, approach along x (x = 0 at the start of the first approach).

@@ -24,9 +24,64 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .kernels import contact_forces
-from .model import DOF_PER_BODY, PITCH, TrainModel
+from .model import (BODIES_PER_CAR, CAR_BODY, DOF_PER_BODY, FRONT_BOGIE, PITCH, ROLL, Z,
+                    TrainModel)
 
 log = logging.getLogger(__name__)
+
+
+def rail_following_guess(model: TrainModel, geom, rail_kin: np.ndarray) -> np.ndarray:
+    """Start point of the static Newton solve: every body placed rigidly on its own rails.
+
+    Each wheelset sits on the rail heights under it (z: mean of its two rails minus the Hertz
+    static approach g P0^(2/3); roll: left-right difference over the contact spacing 2 a), each
+    bogie frame on the straight line through its two wheelsets, each car body on the line
+    through its two bogies (z and pitch at the body's x; ``ttbpipe.vehicle.model.point_row``:
+    z_point = z + roll ry - pitch rx). Lateral DOFs start at 0.
+
+    Why: the Hertz static approach is only ~0.09 mm at 70 kN, so a start that puts a whole car at
+    its mean rail height leaves every wheel above that mean out of contact when the rail heights
+    under the car differ by more than ~0.2 mm (a car straddling the junction of a slab approach,
+    0.6-0.7 mm rail deflection, and the bridge, 1.1 mm). A wheelset without contact has no
+    vertical support; its bogie becomes a mechanism and the Newton Jacobian is singular. From
+    this start the residual is only the suspension forces of the rail-height differences within
+    a bogie (k_primary x a few 0.1 mm, far below the wheel load), well inside the contact range.
+    """
+    q = np.zeros(model.n_dof)
+    a = float(geom.contact_half_distance)
+    z_rails = np.asarray(rail_kin, dtype=float)[:, :, 0]                 # (n_ws, 2) left, right
+    approach = geom.hertz_g * np.asarray(model.static_wheel_load, float) ** (2.0 / 3.0)
+    ws_z = z_rails.mean(axis=1) - approach
+    ws_roll = (z_rails[:, 0] - z_rails[:, 1]) / (2.0 * a)
+    ws_x = np.asarray(model.wheelset_x, dtype=float)
+    dof0 = model.wheelset_dofs[:, 0]                 # first DOF (y) of each wheelset body
+    q[dof0 + Z] = ws_z
+    q[dof0 + ROLL] = ws_roll
+
+    def line(x_a, z_a, x_b, z_b, x):
+        """z and pitch at x of the straight line through (x_a, z_a), (x_b, z_b)."""
+        slope = (z_a - z_b) / (x_a - x_b)
+        return z_b + slope * (x - x_b), -slope   # pitch = -dz/dx (z_point = z - pitch rx)
+
+    for c in range(model.params.n_cars):
+        ws = np.flatnonzero(model.wheelset_car == c)
+        if ws.size != 4:   # pragma: no cover - the model has 4 wheelsets per car
+            raise ValueError(f"car {c}: expected 4 wheelsets, got {ws.size}")
+        base = DOF_PER_BODY * BODIES_PER_CAR * c
+        bogie_x, bogie_z = [], []
+        for b, (front, rear) in enumerate(((ws[0], ws[1]), (ws[2], ws[3]))):
+            xb = 0.5 * (ws_x[front] + ws_x[rear])
+            zb, pitch = line(ws_x[front], ws_z[front], ws_x[rear], ws_z[rear], xb)
+            o = base + DOF_PER_BODY * (FRONT_BOGIE + b)
+            q[o + Z], q[o + PITCH] = zb, pitch
+            q[o + ROLL] = 0.5 * (ws_roll[front] + ws_roll[rear])
+            bogie_x.append(xb); bogie_z.append(zb)
+        xc = 0.5 * (bogie_x[0] + bogie_x[1])
+        zc, pitch = line(bogie_x[0], bogie_z[0], bogie_x[1], bogie_z[1], xc)
+        o = base + DOF_PER_BODY * CAR_BODY
+        q[o + Z], q[o + PITCH] = zc, pitch
+        q[o + ROLL] = ws_roll[ws].mean()
+    return q
 
 
 def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.ndarray | None = None,
@@ -48,14 +103,7 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
     k_susp = (model.stiffness - model.coupler_stiffness).tocsr()
     spin = np.zeros(n, dtype=bool)
     spin[model.wheelset_dofs[:, PITCH]] = True
-    # initial guess: the whole train sunk by the Hertz static penetration on its rails
-    g = geom.hertz_g
-    q = np.zeros(n)
-    for c in range(model.params.n_cars):
-        sl = slice(35 * c, 35 * (c + 1))
-        ws = np.flatnonzero(model.wheelset_car == c)
-        rail_z = rail_kin[ws, :, 0].mean()
-        q[sl][1::DOF_PER_BODY] = rail_z - g * model.static_wheel_load[ws[0]] ** (2.0 / 3.0)
+    q = rail_following_guess(model, geom, rail_kin)
     v = np.zeros(n)
     f_g = model.gravity_force
     eps_q, eps_v = 1e-7, 1e-5
