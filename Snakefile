@@ -22,6 +22,7 @@ include: "workflow/rules/tipm.smk"
 include: "workflow/rules/fields.smk"
 include: "workflow/rules/simulation.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/cases.smk"
 
 
 rule all:

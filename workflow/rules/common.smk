@@ -8,6 +8,11 @@ from snakemake.utils import validate
 
 import ttbpipe
 
+# Paper case studies (config/case*.yaml, issue 8): `--config scale=small` merges the case file's
+# small: overlay before validation (ttbpipe.study.cases.apply_scale).
+from ttbpipe.study.cases import apply_scale as _apply_case_scale
+
+_apply_case_scale(config)
 validate(config, schema="../schemas/config.schema.yaml")
 
 # Package code under src/ is not tracked by Snakemake for reruns: every rule passes this through
@@ -93,7 +98,9 @@ def campaign_file(wildcards) -> str:
 
 
 def all_targets() -> list[str]:
-    """Every final output of the stages that exist."""
+    """Every final output of the stages that exist (a paper case: only the case's outputs)."""
+    if config.get("case"):
+        return case_targets()  # workflow/rules/cases.smk
     targets = ["results/figures/psd_vs_standard.png"]
     targets += expand("results/psd/{date}.parquet", date=CAMPAIGNS)
     targets.append("results/fields/samples.parquet")

@@ -45,6 +45,8 @@ def study_design_inputs(wildcards) -> dict[str, str]:
         inputs["weights"] = f"results/tipm/selection/{TIPM_LAST}.weights.parquet"
     if STUDY_LABELS["forecast"]:
         inputs["states"] = "results/tipm/forecast_states.parquet"
+    if STUDY_LABELS["irregularity_mc"]:   # case 3: the pooled PSD population of the latest campaign
+        inputs["population"] = tipm_population_psds(type("W", (), {"date": TIPM_LAST}))
     return inputs
 
 
@@ -76,6 +78,8 @@ def study_batch_inputs(wildcards) -> dict[str, str]:
         inputs["profiles"] = f"results/tipm/profiles/{TIPM_LAST}.parquet"
     elif kind == "forecast":
         inputs["profiles"] = "results/tipm/forecast_profiles.parquet"
+    elif kind == "irregularity_mc":
+        inputs["population"] = tipm_population_psds(type("W", (), {"date": TIPM_LAST}))
     return inputs
 
 
@@ -93,6 +97,8 @@ rule simulate_batch:
         structure=config.get("structure", {}),
         fields=config.get("fields"),
         seed=config["study"]["seed"],
+        mc_profiles={"wavelength_band_m": config["psd"].get("wavelength_band_m"),
+                     **TIPM.get("profiles", {})},
         version=MODEL_VERSION,
     threads: _STUDY_THREADS
     log:

@@ -1,5 +1,7 @@
 """Snakemake script of rule simulate_batch: one batch of samples (ttbpipe.study.batch)."""
 
+from pathlib import Path
+
 from ttbpipe.io import read_table
 from ttbpipe.logs import setup_logging
 from ttbpipe.study.batch import simulate_batch
@@ -22,6 +24,13 @@ def main(snakemake) -> None:
     profiles = {}
     if "profiles" in snakemake.input.keys():
         profiles = {str(rows["kind"].iloc[0]): snakemake.input.profiles}
+    if "population" in snakemake.input.keys():   # irregularity_mc (paper case 3's MCM)
+        paths = [str(p) for p in snakemake.input.population]
+        settings = dict(getattr(snakemake.params, "mc_profiles", None) or {})
+        profiles = {"irregularity_mc": {
+            "psd_paths": paths, "wavelength_band_m": settings.get("wavelength_band_m"),
+            "length_m": settings.get("length_m", 1000.0), "dx_m": settings.get("dx_m", 0.25),
+            "date": max(Path(p).stem for p in paths)}}
     simulate_batch(rows, config, profiles, snakemake.output.extremes, snakemake.output.histories,
                    scenario=w.scenario, first=int(w.first), last=int(w.last))
 

@@ -12,5 +12,7 @@ design = build_design(
     snakemake.params.study, latest_campaign=snakemake.params.latest_campaign,
     tipm_weights=read_table(inputs.weights) if "weights" in inputs.keys() else None,
     forecast_states=read_table(inputs.states) if "states" in inputs.keys() else None,
-    horizons_months=snakemake.params.horizons_months)
+    horizons_months=snakemake.params.horizons_months,
+    n_population_sections=(sum(int(read_table(p)["section"].nunique()) for p in inputs.population)
+                           if "population" in inputs.keys() else None))
 write_table(design, snakemake.output[0], config=snakemake.config, kind="study_design")

@@ -50,11 +50,12 @@ FIGURE_KINDS = ("convergence", "pdf", "history", "envelope")
 
 
 def scenario_groups(design: pd.DataFrame) -> dict[str, list[str]]:
-    """Scenarios drawn together: 'irregularity' (campaign, single excitation, forecasts) and
-    'fields' (randomness conditions)."""
+    """Scenarios drawn together: 'irregularity' (campaign, single excitation, forecasts, Monte
+    Carlo irregularity) and 'fields' (randomness conditions, KLE and plain Monte Carlo)."""
     kinds = design.drop_duplicates("scenario").set_index("scenario")["kind"]
-    groups = {"irregularity": sorted(s for s, k in kinds.items() if k in ("irregularity", "forecast", "single")),
-              "fields": sorted(s for s, k in kinds.items() if k == "fields")}
+    groups = {"irregularity": sorted(s for s, k in kinds.items()
+                                     if k in ("irregularity", "forecast", "single", "irregularity_mc")),
+              "fields": sorted(s for s, k in kinds.items() if k in ("fields", "fields_mc"))}
     return {g: s for g, s in groups.items() if s}
 
 

@@ -11,7 +11,16 @@ configuration:
   level (eq. 56); scenario label = the forecast's target date, weights = the TIPM weights;
 * ``fields``: random-field samples of the parameter groups (KLE), one scenario per randomness
   condition (``C1`` .. ``C4``: only that group random, the paper's case 2; ``all``: every enabled
-  group), with one deterministic mean-spectrum irregularity; weight 1.
+  group), with one deterministic mean-spectrum irregularity; weight 1;
+* ``fields_mc``: the same conditions sampled by plain Monte Carlo of the full field
+  (``fields.method: mc``, eq. 36) instead of the KLE, labels ``<condition>_mc`` (the paper's
+  MCM reference of Fig. 10, case 2); weight 1;
+* ``irregularity_mc``: plain Monte Carlo over the irregularity population (label ``mc``, the
+  paper's MCM reference of Fig. 14, case 3): sample i is a whole section drawn at random (equal
+  probability) from the latest campaign's pooled PSD population, turned into a profile; weight 1.
+
+``forecast.levels`` (a list) simulates several cumulative-probability levels at once (the lower,
+general and upper limits of Fig. 17, case 4); the labels are then ``<target date>_p<level>``.
 
 The design table (:data:`DESIGN_COLUMNS`) lists every sample; the batch runner takes consecutive
 index ranges of one scenario (:func:`batches`). The seed of a sample is
@@ -36,7 +45,9 @@ log = logging.getLogger(__name__)
 #: Fixed stream number of the simulation stage in the study's seed tree.
 STREAM_ID = 7
 
-SCENARIO_KINDS = ("irregularity", "forecast", "fields")
+SCENARIO_KINDS = ("irregularity", "forecast", "fields", "fields_mc", "irregularity_mc")
+#: Label of the plain Monte Carlo irregularity scenario (case 3).
+MC_IRREGULARITY = "mc"
 #: Label of the single-excitation scenario (one run, mean-spectrum irregularity, nominal parameters).
 SINGLE = "single"
 FIELD_CONDITIONS = ("C1", "C2", "C3", "C4", "all")
@@ -47,6 +58,8 @@ DEFAULT_SCENARIOS: dict[str, dict[str, Any]] = {
     "irregularity": {"enabled": True, "single_excitation": True},
     "forecast": {"enabled": True, "level": 0.5, "horizons_months": None},
     "fields": {"enabled": True, "conditions": ["C1", "C2", "C3", "C4"], "samples": 10},
+    "fields_mc": {"enabled": False, "conditions": ["C4"], "samples": 100},
+    "irregularity_mc": {"enabled": False, "samples": 100},
 }
 
 
@@ -100,7 +113,10 @@ def scenario_labels(study: Mapping[str, Any], latest_campaign: str,
         if bad:
             raise ValueError(f"study.scenarios.forecast.horizons_months {bad} are not forecast by "
                              f"the TIPM (tipm.forecast.horizons_months = {available})")
-        out["forecast"] = sorted({add_months(latest_campaign, h) for h in chosen})
+        dates = sorted({add_months(latest_campaign, h) for h in chosen})
+        levels = forecast_levels(sc["forecast"])
+        out["forecast"] = (dates if levels is None else
+                           [forecast_label(d, p) for d in dates for p in levels])
     if sc["fields"]["enabled"]:
         conditions = list(sc["fields"]["conditions"])
         bad = [c for c in conditions if c not in FIELD_CONDITIONS]
@@ -108,10 +124,51 @@ def scenario_labels(study: Mapping[str, Any], latest_campaign: str,
             raise ValueError(f"study.scenarios.fields.conditions: {bad}; expected a subset of "
                              f"{list(FIELD_CONDITIONS)}")
         out["fields"] = conditions
+    if sc["fields_mc"]["enabled"]:
+        conditions = list(sc["fields_mc"]["conditions"])
+        bad = [c for c in conditions if c not in FIELD_CONDITIONS]
+        if bad:
+            raise ValueError(f"study.scenarios.fields_mc.conditions: {bad}; expected a subset of "
+                             f"{list(FIELD_CONDITIONS)}")
+        out["fields_mc"] = [f"{c}_mc" for c in conditions]
+    if sc["irregularity_mc"]["enabled"]:
+        out["irregularity_mc"] = [MC_IRREGULARITY]
     labels = [lab for v in out.values() for lab in v]
     if len(set(labels)) != len(labels):
         raise ValueError(f"scenario labels are not unique: {labels}")
     return out
+
+
+def forecast_levels(forecast: Mapping[str, Any]) -> list[float] | None:
+    """The list ``forecast.levels`` (several levels, labels with ``_p<level>``) or None (one
+    ``forecast.level``, labels = target dates)."""
+    levels = forecast.get("levels")
+    if levels is None:
+        return None
+    levels = [float(p) for p in levels]
+    if not levels or any(not 0.0 < p < 1.0 for p in levels):
+        raise ValueError(f"study.scenarios.forecast.levels {levels}: need levels in (0, 1)")
+    return levels
+
+
+def forecast_label(target_date: str, level: float) -> str:
+    """Scenario label of a forecast at one level among several: ``2026-12-15_p0.95``."""
+    return f"{target_date}_p{float(level):g}"
+
+
+def parse_forecast_label(label: str) -> tuple[str, float | None]:
+    """(target date, level or None) of a forecast scenario label."""
+    date, _, level = str(label).partition("_p")
+    return date, (float(level) if level else None)
+
+
+def mc_section(study_seed: int, sample_index: int, n_sections: int) -> int:
+    """Population section of Monte Carlo irregularity sample i: uniform over the sections, drawn
+    from the sample's own SeedSequence (independent of every other sample)."""
+    if int(n_sections) < 1:
+        raise ValueError("irregularity_mc: the population has no section")
+    rng = np.random.default_rng(sample_seed_sequence(study_seed, MC_IRREGULARITY, sample_index))
+    return int(rng.integers(int(n_sections)))
 
 
 def _rows(scenario: str, kind: str, indices, weights, profile_indices, condition: str,
@@ -128,12 +185,15 @@ def _rows(scenario: str, kind: str, indices, weights, profile_indices, condition
 def build_design(study: Mapping[str, Any], *, latest_campaign: str,
                  tipm_weights: pd.DataFrame | None = None,
                  forecast_states: pd.DataFrame | None = None,
-                 horizons_months: Iterable[float] = ()) -> pd.DataFrame:
+                 horizons_months: Iterable[float] = (),
+                 n_population_sections: int | None = None) -> pd.DataFrame:
     """Every sample of the study (:data:`DESIGN_COLUMNS`), sorted by scenario and index.
 
     ``tipm_weights``: the latest campaign's ``results/tipm/selection/<date>.weights.parquet``
     (``sample_index``, ``weight``); ``forecast_states``: ``results/tipm/forecast_states.parquet``
-    (``profile_index``, ``target_date``, ``level``, ``sample_index``, ``weight``).
+    (``profile_index``, ``target_date``, ``level``, ``sample_index``, ``weight``);
+    ``n_population_sections``: sections of the latest campaign's pooled PSD population (scenario
+    ``irregularity_mc``: ``profile_index`` = the drawn section).
     """
     sc = resolve_scenarios(study)
     seed = int(study["seed"])
@@ -151,15 +211,16 @@ def build_design(study: Mapping[str, Any], *, latest_campaign: str,
     if labels["forecast"]:
         if forecast_states is None:
             raise ValueError("scenario forecast needs results/tipm/forecast_states.parquet")
-        level = float(sc["forecast"]["level"])
-        states = forecast_states[np.isclose(forecast_states["level"].to_numpy(float), level)]
-        for target in labels["forecast"]:
+        for label in labels["forecast"]:
+            target, level = parse_forecast_label(label)
+            level = float(sc["forecast"]["level"]) if level is None else level
+            states = forecast_states[np.isclose(forecast_states["level"].to_numpy(float), level)]
             block = states[states["target_date"].astype(str) == target].sort_values("sample_index")
             if block.empty:
                 raise ValueError(f"forecast_states has no state for target date {target} at level "
                                  f"{level}; study.scenarios.forecast.level must be one of "
                                  f"tipm.forecast.levels {sorted(forecast_states['level'].unique())}")
-            blocks.append(_rows(target, "forecast", block["sample_index"], block["weight"],
+            blocks.append(_rows(label, "forecast", block["sample_index"], block["weight"],
                                 block["profile_index"], "nominal", seed))
     n_fields = int(sc["fields"].get("samples", 10))
     for condition in labels["fields"]:
@@ -167,6 +228,22 @@ def build_design(study: Mapping[str, Any], *, latest_campaign: str,
             raise ValueError(f"study.scenarios.fields.samples must be >= 1, got {n_fields}")
         blocks.append(_rows(condition, "fields", np.arange(n_fields), np.ones(n_fields),
                             np.full(n_fields, -1), condition, seed))
+    n_mc = int(sc["fields_mc"].get("samples", 100))
+    for label in labels["fields_mc"]:
+        if n_mc < 1:
+            raise ValueError(f"study.scenarios.fields_mc.samples must be >= 1, got {n_mc}")
+        blocks.append(_rows(label, "fields_mc", np.arange(n_mc), np.ones(n_mc),
+                            np.full(n_mc, -1), label[:-len("_mc")], seed))
+    if labels["irregularity_mc"]:
+        if n_population_sections is None:
+            raise ValueError("scenario irregularity_mc needs the number of sections of the "
+                             f"population of campaign {latest_campaign}")
+        n = int(sc["irregularity_mc"].get("samples", 100))
+        if n < 1:
+            raise ValueError(f"study.scenarios.irregularity_mc.samples must be >= 1, got {n}")
+        sections = [mc_section(seed, i, n_population_sections) for i in range(n)]
+        blocks.append(_rows(MC_IRREGULARITY, "irregularity_mc", np.arange(n), np.ones(n),
+                            sections, "nominal", seed))
     if not blocks:
         raise ValueError("study.scenarios: every scenario is disabled; enable at least one")
     design = pd.concat(blocks, ignore_index=True)

@@ -66,6 +66,56 @@ def mean_spectrum_seed(study_seed: int) -> int:
     return int(seq.generate_state(1)[0])
 
 
+def mc_fields_seed(study_seed: int) -> int:
+    """Seed of the plain Monte Carlo fields scenarios (``fields_mc``, case 2's MCM reference):
+    a stream of its own, so that MC sample i is independent of KLE sample i (the two estimates
+    of Fig. 10 must not share their random numbers)."""
+    seq = np.random.SeedSequence([int(study_seed), STREAM_ID, scenario_key("fields_mc")])
+    return int(seq.generate_state(1)[0])
+
+
+#: Stream of the Monte Carlo irregularity profiles of the study (ttbpipe.tipm.profiles.profile_rng;
+#: 0-2 are the TIPM's representative, forecast and envelope streams).
+STREAM_MC_PROFILES = 3
+
+
+@functools.lru_cache(maxsize=2)
+def _mc_population(paths: tuple[str, ...], band: tuple[float, float] | None):
+    """Pooled PSD population of the Monte Carlo irregularity scenario (cached per process)."""
+    from ..tipm.population import PSDPopulation
+    from ..tipm.stages import load_population
+
+    return PSDPopulation.concat(load_population(list(paths), band))
+
+
+def mc_profile(population: Mapping[str, Any], study_seed: int, section: int,
+               sample_index: int) -> pd.DataFrame:
+    """Profile of Monte Carlo irregularity sample i: population section ``section``'s own PSD
+    (all four channels, whole section: the cross-channel levels stay together) synthesised with
+    random phases from ``profile_rng(seed, date, STREAM_MC_PROFILES, i)``.
+
+    ``population``: {"psd_paths": [...], "wavelength_band_m": [lo, hi], "length_m", "dx_m",
+    "date": the latest campaign}.
+    """
+    from ..tipm.profiles import profiles_from_psd_sets
+
+    band = population.get("wavelength_band_m")
+    pop = _mc_population(tuple(str(p) for p in population["psd_paths"]),
+                         None if band is None else tuple(float(b) for b in band))
+    if not 0 <= int(section) < pop.n_sections:
+        raise ValueError(f"irregularity_mc sample {sample_index}: section {section} outside the "
+                         f"population of {pop.n_sections} sections")
+    table = profiles_from_psd_sets(
+        pop.psd_mm2_m[[int(section)]], pop.frequency_per_m, pop.channels, [int(sample_index)],
+        length_m=float(population["length_m"]), dx_m=float(population["dx_m"]),
+        study_seed=study_seed, date=str(population["date"]), stream=STREAM_MC_PROFILES,
+        wavelength_band_m=tuple(band) if band is not None else (2.0, 200.0))
+    for channel in PROFILE_CHANNELS:   # a population without a channel: that channel is flat
+        if channel not in table.columns:
+            table[channel] = 0.0
+    return table[["chainage_m", *PROFILE_CHANNELS]]
+
+
 @functools.lru_cache(maxsize=8)
 def _field_sampler(fields_json: str, structure_json: str, study_seed: int, condition: str):
     """FieldSampler of one randomness condition on the structure's carriers (cached per process:
@@ -84,13 +134,20 @@ def _field_sampler(fields_json: str, structure_json: str, study_seed: int, condi
 
 
 def field_factors(fields: Mapping[str, Any], structure: Mapping[str, Any], study_seed: int,
-                  condition: str, sample_index: int) -> dict[str, np.ndarray]:
+                  condition: str, sample_index: int, method: str | None = None
+                  ) -> dict[str, np.ndarray]:
     """Factors {parameter: array over the structure's carriers} of one fields sample.
 
     Group g's numbers come from ``sample_generator(seed, i, stream_g)`` whatever the other groups,
     so condition ``C2`` sample i equals the C2 columns of sample i of the fields stage
     (``results/fields/samples.parquet`` with ``fields.geometry.source: structure``).
+    ``method``: override ``fields.method`` (``mc`` for the fields_mc scenarios, which also use
+    their own seed, :func:`mc_fields_seed`).
     """
+    if method is not None and method != fields.get("method", "kle"):
+        fields = {**fields, "method": method}
+    if method == "mc":
+        study_seed = mc_fields_seed(study_seed)
     sampler = _field_sampler(json.dumps(fields, sort_keys=True, default=str),
                              json.dumps(structure, sort_keys=True, default=str), int(study_seed),
                              str(condition))
@@ -202,6 +259,18 @@ def extremes_from_run(table: pd.DataFrame, summary: Mapping[str, Any], sim: Mapp
             if col in table.columns:
                 out[f"max_span{s}_{name}_acc_m_s2"] = _lowpass_peak(table[col].to_numpy(float),
                                                                    dt_out, cutoff)
+    if np.isposinf(out["max_derailment_coefficient"]):
+        # A wheel lifted off (P = 0) while carrying a lateral force: Q/P is infinite at those
+        # steps. That is a physical event (the unloading ratio is 1 and exceeds its limit), not
+        # numerical trouble; Q/P is reported as its largest value over the output steps with
+        # the wheel in contact, and the lift is logged with its count.
+        qp = table[[c for c in table.columns if c.endswith("_QP")]].to_numpy(float)
+        lifted = ~np.isfinite(qp)
+        out["max_derailment_coefficient"] = float(qp[~lifted].max()) if (~lifted).any() else 0.0
+        log.warning("wheel lift with lateral force at %d of %d wheel-output steps (unloading "
+                    "ratio %.2f): max derailment coefficient taken over the steps in contact, "
+                    "%.3f", int(lifted.sum()), qp.size, out["max_wheel_unloading_ratio"],
+                    out["max_derailment_coefficient"])
     bad = {k: v for k, v in out.items() if not np.isfinite(v)}
     if bad:
         raise RuntimeError(f"non-finite response indices {bad}: numerical trouble in the run; "
@@ -219,6 +288,14 @@ def history_from_run(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) 
     out = {"position_m": table["x_lead_m"].to_numpy(float)}
     for name, col in columns.items():
         values = table[col].to_numpy(float)
+        if name == "derailment_coefficient" and np.isposinf(values).any():
+            # wheel lift with lateral force (Q/P undefined, see extremes_from_run): those steps
+            # take the wheel's largest in-contact Q/P (conservative), logged with their count
+            lifted = np.isposinf(values)
+            values = np.where(lifted, values[~lifted].max() if (~lifted).any() else 0.0, values)
+            log.warning("history %s: wheel lift with lateral force at %d of %d output steps; "
+                        "Q/P there set to the wheel's largest in-contact value", col,
+                        int(lifted.sum()), values.size)
         out[name] = values * 1e-3 if col.endswith("_mm") else values
     return pd.DataFrame(out)
 
@@ -235,7 +312,13 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
     irr_cfg = sim["irregularity"]
     properties = None
     with tempfile.TemporaryDirectory(prefix="ttbpipe_sample_") as tmp:
-        if kind in ("irregularity", "forecast"):
+        if kind == "irregularity_mc":
+            prof = mc_profile(profiles[kind], study_seed, int(row["profile_index"]), index)
+            prof["chainage_m"] = prof["chainage_m"] - prof["chainage_m"].iloc[0] - float(irr_cfg["lead_in_m"])
+            path = Path(tmp) / "profile.parquet"
+            prof.to_parquet(path)
+            irregularity = {"source": "file", "file": str(path), "fade_in_m": irr_cfg["fade_in_m"]}
+        elif kind in ("irregularity", "forecast"):
             id_column = "sample_index" if kind == "irregularity" else "profile_index"
             prof = read_profile(profiles[kind], id_column, int(row["profile_index"]))
             # the profile's chainage starts lead_in_m behind x = 0 of the structure so that it
@@ -244,21 +327,22 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
             path = Path(tmp) / "profile.parquet"
             prof.to_parquet(path)
             irregularity = {"source": "file", "file": str(path), "fade_in_m": irr_cfg["fade_in_m"]}
-        elif kind in ("fields", "single"):
+        elif kind in ("fields", "fields_mc", "single"):
             irregularity = {"source": "synthetic", "spectrum": irr_cfg["spectrum"],
                             "dx_m": irr_cfg["dx_m"], "fade_in_m": irr_cfg["fade_in_m"],
                             "seed": mean_spectrum_seed(study_seed)}
-        if kind == "fields":
+        if kind in ("fields", "fields_mc"):
             if fields is None:
                 raise ValueError("scenario fields needs the fields: section of the configuration")
-            factors = field_factors(fields, structure, study_seed, str(row["condition"]), index)
+            factors = field_factors(fields, structure, study_seed, str(row["condition"]), index,
+                                    method="mc" if kind == "fields_mc" else None)
             rows = [pd.DataFrame({"sample_index": index, "parameter": name,
                                   "carrier_index": np.arange(v.size), "factor": v})
                     for name, v in factors.items()]
             path = Path(tmp) / "factors.parquet"
             pd.concat(rows, ignore_index=True).to_parquet(path)
             properties = {"field_samples": {"path": str(path), "sample_index": index}}
-        elif kind not in ("irregularity", "forecast", "single"):
+        elif kind not in ("irregularity", "forecast", "single", "irregularity_mc"):
             raise ValueError(f"design row {row['scenario']}/{index}: unknown kind {kind!r}")
         case = build_case(sim, structure, irregularity=irregularity, properties=properties)
         from ..simulation.coupled import run_coupled
@@ -268,7 +352,9 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
         except Exception as exc:
             source = (f" (irregularity profile {row['profile_index']} of {profiles[kind]}, "
                       f"shifted to start {irr_cfg['lead_in_m']} m behind x = 0)"
-                      if kind in profiles else "")
+                      if kind in profiles and kind != "irregularity_mc" else
+                      f" (population section {row['profile_index']})" if kind == "irregularity_mc"
+                      else "")
             raise RuntimeError(f"sample ({row['scenario']}, {index}){source} failed: {exc}") from exc
     n_spans = len({m.group(1) for c in table.columns
                    if (m := re.match(r"girder_span(\d+)_mid_z_acc_m_s2$", c))}) or 1
