@@ -1,6 +1,6 @@
 """Standard track-irregularity spectra (ttbpipe.irregularity.spectra).
 
-Reference values: /work/shared/reference/physics.md section 1 ([C] band RMS values) and closed-form
+Reference values: docs/reference/physics.md section 1 ([C] band RMS values) and closed-form
 integrals of the published formulas.
 """
 

@@ -21,7 +21,7 @@ Each spectrum is valid over a wavelength band only; :meth:`TrackSpectrum.psd_mm2
 ``ValueError`` outside it unless ``extrapolate=True`` (physics.md §7.6: the TB/T vertical power
 k = 3.39 explodes at low frequency).
 
-Sources: /work/shared/reference/physics.md section 1 (with the primary sources named in each
+Sources: docs/reference/physics.md section 1 (with the primary sources named in each
 class docstring).
 """
 

@@ -1,6 +1,6 @@
 """Safety and comfort limits checked against the per-sample extremes, each with its source.
 
-Defaults follow ``/work/shared/reference/physics.md`` section 4 ("Limits"); the tag after each
+Defaults follow ``docs/reference/physics.md`` section 4 ("Limits"); the tag after each
 source says how well it is established there: [V] verified against the standard's text or a
 script implementing it, [M] quoted from memory / secondary literature and to be confirmed.
 

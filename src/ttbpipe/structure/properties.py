@@ -1,6 +1,6 @@
 """Default properties of the track-bridge structure, each with its source.
 
-Tags as in /work/shared/reference/physics.md: [V] read in a public source, [M] standard literature
+Tags as in docs/reference/physics.md: [V] read in a public source, [M] standard literature
 value not re-read at the source, [C] computed here from the others. All values SI.
 
 The set is chosen to be coherent (Zeng et al. 2014 for fastener, slab, CA and girder; Hindawi SV
