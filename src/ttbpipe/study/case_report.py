@@ -312,7 +312,12 @@ def compare_report(*, extremes: pd.DataFrame, history: pd.DataFrame, table1: pd.
                 for r in block.itertuples():
                     rows.append({"quantity": column, "reference": "forecast", "months": r.months,
                                  "level": r.level, "mean": r.mean, "n_samples": r.n_samples})
-            ax.set_title(column.replace("max_", "").replace("_", " "), fontsize=8)
+            ax.set_title({"max_deck_vertical_acc_m_s2": "(a) midspan vertical acc.",
+                          "max_deck_lateral_acc_m_s2": "(b) midspan lateral acc.",
+                          "max_carbody_lateral_acc_m_s2": "car-body lateral acc.",
+                          "max_wheel_vertical_force_N": "(c) wheel-rail vertical force",
+                          "max_wheel_lateral_force_N": "(d) wheel-rail lateral force"}[column],
+                         fontsize=8)
             ax.set_xlabel("months after the latest campaign")
             ax.set_ylabel(unit)
             ax.grid(alpha=0.3)
