@@ -9,7 +9,7 @@ its human-readable output; this runner collects them, takes the median over the 
 a Markdown table (figure, median, unit, runs, min-max) with the machine described (CPU model from
 /proc/cpuinfo, cores, memory, Python/numpy/numba versions, load average at the start and end).
 A script that fails is reported in the table's notes with its exit code and the last line of its
-error output; the others still run. Timings only: nothing is asserted (HELPER_BRIEF standards).
+error output; the others still run. Timings only: nothing is asserted (docs/dev/contributing.md).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ at a few tens of seconds. What is checked and against what:
 
 * results do not depend on the batch size or on the executor (local loop vs a Dask LocalCluster):
   exact equality of every extremes and time-history value (the project's determinism rule,
-  docs/dev/HELPER_BRIEF.md; the runs are deterministic floating-point programs);
+  docs/dev/contributing.md; the runs are deterministic floating-point programs);
 * an exception in the middle of a batch leaves no file, and a rerun redoes only the missing batch;
 * the extremes are the documented reductions of the run (docs/results_schema.md mapping);
 * the deck-acceleration low-pass (EN 1990 A2 A2.4.4.2.1, 30 Hz) against the Butterworth

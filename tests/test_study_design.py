@@ -1,7 +1,7 @@
 """Study design: samples, weights, seeds and batches (ttbpipe.study.design; docs/studies.md).
 
 Exact checks (no tolerance): the project rule "a sample's random numbers depend only on the study
-seed and the sample index" (docs/dev/HELPER_BRIEF.md) and the batch partition are combinatorial.
+seed and the sample index" (docs/dev/contributing.md) and the batch partition are combinatorial.
 """
 
 import numpy as np
