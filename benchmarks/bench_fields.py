@@ -20,14 +20,7 @@ import yaml
 from ttbpipe.fields import (FieldSampler, KarhunenLoeve, NatafTransform, carrier_positions,
                             exponential_kernel_eigenvalues, make_marginal, modes_for_fractions)
 
-
-def timed(fn, repeat: int = 3):
-    best, result = np.inf, None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, result
+from _timing import timed  # benchmarks/_timing.py (sibling module)
 
 
 def main() -> None:

@@ -21,16 +21,9 @@ from ttbpipe.irregularity.psd import section_psds, welch_psd
 from ttbpipe.irregularity.spectra import get_spectrum
 from ttbpipe.irregularity.synthesis import synthesize_channel, synthesize_profiles
 
+from _timing import timed  # benchmarks/_timing.py (sibling module)
+
 BANDS_M = [(133.0, 200.0), (100.0, 133.0), (50.0, 100.0), (20.0, 50.0), (2.0, 20.0)]
-
-
-def timed(fn, repeat: int = 3):
-    best, result = np.inf, None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, result
 
 
 def band_ratios(frequency, psd, spectrum, channel):
