@@ -35,7 +35,7 @@ inspections:
 study:
   seed: 1
   scenarios:
-    fields: {conditions: [C2], samples: 2}
+    fields: {conditions: [C1], samples: 2}   # random rail: exercises the per-sample step check
 simulation:
   end_x_m: 100.0
   batch_size: 10

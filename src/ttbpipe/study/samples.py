@@ -31,7 +31,7 @@ SIMULATION_DEFAULTS: dict[str, Any] = {
     "train": {"composition": ["motor", "trailer", "motor"],
               "contact": {"profile": "conical", "conicity": 0.04}},
     "speed_kmh": 300.0,
-    "time_step_s": 1.25e-4,
+    "time_step_s": 1.0e-4,
     "output_interval_s": 2.0e-3,
     "end_x_m": None,
     "irregularity": {"spectrum": "tbt3352", "dx_m": 0.25, "fade_in_m": 20.0, "lead_in_m": 20.0},
