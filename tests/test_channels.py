@@ -26,3 +26,15 @@ def test_positive_gauge_widens_the_track():
     # y is positive to the left: a wider gauge moves the left rail left and the right rail right.
     rails = rails_from_spectral(np.zeros(1), np.zeros(1), np.zeros(1), np.array([2.0]))
     assert rails["y_left"][0] == 1.0 and rails["y_right"][0] == -1.0
+
+
+def test_inspection_columns_from_spectral_inverts_spectral_from_inspection():
+    from ttbpipe.channels import INSPECTION_COLUMNS, inspection_columns_from_spectral
+    rng = np.random.default_rng(1)
+    vertical, alignment, cross_level, gauge = rng.normal(size=(4, 50))
+    columns = inspection_columns_from_spectral(vertical, alignment, cross_level, gauge)
+    assert tuple(columns) == INSPECTION_COLUMNS
+    back = spectral_from_inspection(columns)
+    for name, original in zip(("vertical", "alignment", "cross_level", "gauge"),
+                              (vertical, alignment, cross_level, gauge)):
+        np.testing.assert_allclose(back[name], original, atol=1e-12)

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ttbpipe.channels import INSPECTION_COLUMNS, rails_from_spectral
+from ttbpipe.channels import INSPECTION_COLUMNS, SPECTRAL_CHANNELS, inspection_columns_from_spectral
 from ttbpipe.inspection import (InspectionError, campaign_date, check_campaign, clean_campaign,
                                 read_campaign)
 from ttbpipe.irregularity.synthesis import synthesize_profiles
@@ -21,14 +21,9 @@ from ttbpipe.irregularity.synthesis import synthesize_profiles
 def good_frame(length_m: float = 500.0, seed: int = 3) -> pd.DataFrame:
     """A clean TB/T 3352 campaign (per-rail channels from the four spectral channels)."""
     p = synthesize_profiles("tbt3352", length_m, 0.25, seed=seed)
-    rails = rails_from_spectral(p["vertical_mm"].to_numpy(), p["alignment_mm"].to_numpy(),
-                                p["cross_level_mm"].to_numpy(), p["gauge_mm"].to_numpy())
-    return pd.DataFrame({
-        "chainage_m": p["chainage_m"].to_numpy(),
-        "vertical_left_mm": rails["z_left"], "vertical_right_mm": rails["z_right"],
-        "alignment_left_mm": rails["y_left"], "alignment_right_mm": rails["y_right"],
-        "cross_level_mm": p["cross_level_mm"].to_numpy(), "gauge_mm": p["gauge_mm"].to_numpy(),
-    })
+    columns = inspection_columns_from_spectral(
+        *(p[f"{channel}_mm"].to_numpy() for channel in SPECTRAL_CHANNELS))
+    return pd.DataFrame({"chainage_m": p["chainage_m"].to_numpy(), **columns})
 
 
 def write_csv(frame: pd.DataFrame, tmp_path, name: str = "2023-01-15.csv"):

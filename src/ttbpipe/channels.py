@@ -64,3 +64,19 @@ def rails_from_spectral(vertical: np.ndarray, alignment: np.ndarray, cross_level
         "y_left": alignment + 0.5 * gauge,
         "y_right": alignment - 0.5 * gauge,
     }
+
+
+def inspection_columns_from_spectral(vertical: np.ndarray, alignment: np.ndarray,
+                                     cross_level: np.ndarray, gauge: np.ndarray) -> dict[str, np.ndarray]:
+    """The six per-rail inspection columns (``INSPECTION_COLUMNS``) from the four spectral channels.
+
+    The inverse of :func:`spectral_from_inspection` for geometry without per-rail defects: the rail
+    channels come from :func:`rails_from_spectral`, cross-level and gauge are copied.
+    """
+    rails = rails_from_spectral(vertical, alignment, cross_level, gauge)
+    return {
+        "vertical_left_mm": rails["z_left"], "vertical_right_mm": rails["z_right"],
+        "alignment_left_mm": rails["y_left"], "alignment_right_mm": rails["y_right"],
+        "cross_level_mm": np.asarray(cross_level, dtype=float),
+        "gauge_mm": np.asarray(gauge, dtype=float),
+    }
