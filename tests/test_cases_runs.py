@@ -146,7 +146,8 @@ def test_case1_small_workflow_under_snakemake(tmp_path):
     from test_workflow import _copy_repository
 
     _copy_repository(tmp_path)
-    case = {"case": {"name": "case1", "sweep": {"speeds_kmh": [200, 400, 100],
+    case = {"results_dir": "results/tiny_case1", "logs_dir": "logs/tiny_case1",
+            "case": {"name": "case1", "sweep": {"speeds_kmh": [200, 400, 100],
                                                 "history_speed_kmh": 300, "history_car": 1,
                                                 "batch_size": 2}},
             "structure": TINY_STRUCTURE,
@@ -156,7 +157,7 @@ def test_case1_small_workflow_under_snakemake(tmp_path):
                            "tiny_case1.yaml"], cwd=tmp_path, capture_output=True, text=True,
                           timeout=240)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    out = tmp_path / "results" / "cases" / "case1"
+    out = tmp_path / "results" / "tiny_case1" / "paper_comparison"   # the case's results_dir
     sweep = pd.read_parquet(out / "sweep.parquet")
     assert sweep["speed_kmh"].tolist() == [200.0, 300.0, 400.0]
     for name in ("fig06_rail_displacement_under_wheel.png", "fig07_girder_midspan.png",
@@ -164,7 +165,9 @@ def test_case1_small_workflow_under_snakemake(tmp_path):
         assert (out / "figures" / name).stat().st_size > 1000
     res = pd.read_parquet(out / "resonance.parquet")
     assert (res["predicted_kmh"] == 3.6 * res["frequency_hz"] * 25.0 / res["order"]).all()
-    assert not (tmp_path / "results" / "study").exists()   # only the case's jobs ran
+    # only the case's jobs ran, and only under its own results_dir and logs_dir
+    assert sorted(p.name for p in (tmp_path / "results").iterdir()) == ["tiny_case1"]
+    assert sorted(p.name for p in (tmp_path / "logs").iterdir()) == ["tiny_case1"]
 
 
 def test_wheel_lift_is_reported_not_failed():

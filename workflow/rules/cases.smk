@@ -11,7 +11,7 @@ from ttbpipe.study.cases import sweep_speeds as _case_sweep_speeds
 
 CASE = config.get("case") or {}
 CASE_NAME = CASE.get("name", "")
-CASE_OUT = f"results/cases/{CASE_NAME}"
+CASE_OUT = f"{RESULTS}/paper_comparison"
 CASE_SWEEP = CASE.get("sweep") or {}
 CASE_SPEEDS = _case_sweep_speeds(CASE_SWEEP) if CASE_SWEEP else []
 CASE_SPEED_BATCHES = _case_speed_batches(CASE_SPEEDS, CASE_SWEEP.get("batch_size", 4)) if CASE_SWEEP else []
@@ -36,7 +36,7 @@ if CASE_SWEEP:
           seed=config["study"]["seed"],
           version=MODEL_VERSION,
       log:
-          f"logs/cases/{CASE_NAME}/sweep_{{sfirst}}-{{slast}}.log",
+          f"{LOGS}/paper_comparison/sweep_{{sfirst}}-{{slast}}.log",
       script:
           "../scripts/case_sweep_batch.py"
 
@@ -52,7 +52,7 @@ if CASE_SWEEP:
           seed=config["study"]["seed"],
           version=MODEL_VERSION,
       log:
-          f"logs/cases/{CASE_NAME}/time_history.log",
+          f"{LOGS}/paper_comparison/time_history.log",
       script:
           "../scripts/case_time_history.py"
 
@@ -73,7 +73,7 @@ if CASE_SWEEP:
           sweep=CASE_SWEEP,
           version=MODEL_VERSION,
       log:
-          f"logs/cases/{CASE_NAME}/sweep_report.log",
+          f"{LOGS}/paper_comparison/sweep_report.log",
       script:
           "../scripts/case_sweep_report.py"
 
@@ -83,11 +83,11 @@ else:
   rule case_compare:
       """Cases 2-4: the paper's comparisons over the study's aggregated outputs."""
       input:
-          extremes="results/study/extremes.parquet",
-          history="results/study/history_statistics.parquet",
-          table1="results/study/table1_std.parquet",
-          table1_history="results/study/table1_history_std.parquet",
-          design="results/study/design.parquet",
+          extremes=results_path("study/extremes.parquet"),
+          history=results_path("study/history_statistics.parquet"),
+          table1=results_path("study/table1_std.parquet"),
+          table1_history=results_path("study/table1_history_std.parquet"),
+          design=results_path("study/design.parquet"),
       output:
           summary=f"{CASE_OUT}/summary.md",
           comparison=f"{CASE_OUT}/comparison.parquet",
@@ -97,7 +97,7 @@ else:
           latest_campaign=TIPM_LAST,
           version=MODEL_VERSION,
       log:
-          f"logs/cases/{CASE_NAME}/compare.log",
+          f"{LOGS}/paper_comparison/compare.log",
       script:
           "../scripts/case_compare.py"
 
@@ -108,4 +108,4 @@ def case_targets() -> list[str]:
         return []
     if CASE_SWEEP:
         return [f"{CASE_OUT}/sweep.parquet", f"{CASE_OUT}/summary.md"]
-    return [f"{CASE_OUT}/summary.md", "results/study/report/summary.html"]
+    return [f"{CASE_OUT}/summary.md", results_path("study/report/summary.html")]

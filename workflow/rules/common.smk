@@ -1,6 +1,7 @@
 # Configuration validation, campaign discovery and input functions shared by all stages.
 
 import datetime as _dt
+import os
 import re
 from pathlib import Path
 
@@ -18,6 +19,28 @@ validate(config, schema="../schemas/config.schema.yaml")
 # Package code under src/ is not tracked by Snakemake for reruns: every rule passes this through
 # `params:` so that a new ttbpipe version reruns what it made.
 MODEL_VERSION = ttbpipe.__version__
+
+# Where a study writes (config `results_dir`, `logs_dir`): each paper case has its own
+# (config/case<N>.yaml: results/case<N>, logs/case<N>) so that cases and the default study can
+# share one checkout without overwriting each other's outputs.
+RESULTS = config.get("results_dir", "results").rstrip("/")
+LOGS = config.get("logs_dir", "logs").rstrip("/")
+
+
+def results_path(relative: str) -> str:
+    """`relative` under the study's results directory (wildcards pass through unchanged)."""
+    return f"{RESULTS}/{relative}"
+
+
+def log_path(relative: str) -> str:
+    """`relative` under the study's log directory."""
+    return f"{LOGS}/{relative}"
+
+
+def report_caption_path(path: str) -> str:
+    """A generated file as a report() caption: captions resolve against workflow/rules/."""
+    return path if os.path.isabs(path) else os.path.join("..", "..", path)
+
 
 DATE_PATTERN = r"\d{4}-\d{2}-\d{2}"
 CAMPAIGN_FILE = re.compile(rf"^({DATE_PATTERN})\.(csv|parquet)$")
@@ -101,9 +124,9 @@ def all_targets() -> list[str]:
     """Every final output of the stages that exist (a paper case: only the case's outputs)."""
     if config.get("case"):
         return case_targets()  # workflow/rules/cases.smk
-    targets = ["results/figures/psd_vs_standard.png"]
-    targets += expand("results/psd/{date}.parquet", date=CAMPAIGNS)
-    targets.append("results/fields/samples.parquet")
+    targets = [results_path("figures/psd_vs_standard.png")]
+    targets += expand(results_path("psd/{date}.parquet"), date=CAMPAIGNS)
+    targets.append(results_path("fields/samples.parquet"))
     targets += tipm_targets()  # workflow/rules/tipm.smk
     targets += study_targets()  # workflow/rules/report.smk
     return targets

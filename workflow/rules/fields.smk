@@ -4,12 +4,12 @@
 rule sample_fields:
     """Draw the study's cross-correlated field samples (multiplicative factors per carrier)."""
     output:
-        "results/fields/samples.parquet",
+        results_path("fields/samples.parquet"),
     params:
         fields=config.get("fields", {}),
         seed=config["study"]["seed"],
         version=MODEL_VERSION,
     log:
-        "logs/fields/sample_fields.log",
+        log_path("fields/sample_fields.log"),
     script:
         "../scripts/sample_fields.py"

@@ -14,7 +14,7 @@ rule synth_inspections:
         dates=synthetic_dates(),
         version=MODEL_VERSION,
     log:
-        "logs/inspections/synth_inspections.log",
+        log_path("inspections/synth_inspections.log"),
     script:
         "../scripts/synth_inspections.py"
 
@@ -24,13 +24,13 @@ rule check_inspection:
     input:
         campaign_file,
     output:
-        clean="results/inspections/clean/{date}.parquet",
-        repairs="results/inspections/clean/{date}.repairs.json",
+        clean=results_path("inspections/clean/{date}.parquet"),
+        repairs=results_path("inspections/clean/{date}.repairs.json"),
     params:
         cleaning=config["inspections"].get("cleaning", {}),
         version=MODEL_VERSION,
     log:
-        "logs/inspections/check/{date}.log",
+        log_path("inspections/check/{date}.log"),
     script:
         "../scripts/check_inspection.py"
 
@@ -38,14 +38,14 @@ rule check_inspection:
 rule estimate_psd:
     """Welch PSD per track section and channel of one cleaned campaign."""
     input:
-        "results/inspections/clean/{date}.parquet",
+        results_path("inspections/clean/{date}.parquet"),
     output:
-        "results/psd/{date}.parquet",
+        results_path("psd/{date}.parquet"),
     params:
         psd=config["psd"],
         version=MODEL_VERSION,
     log:
-        "logs/psd/{date}.log",
+        log_path("psd/{date}.log"),
     script:
         "../scripts/estimate_psd.py"
 
@@ -53,10 +53,10 @@ rule estimate_psd:
 rule plot_psd_vs_standard:
     """Estimated PSDs of all campaigns against the standard spectrum, per channel."""
     input:
-        expand("results/psd/{date}.parquet", date=CAMPAIGNS),
+        expand(results_path("psd/{date}.parquet"), date=CAMPAIGNS),
     output:
         report(
-            "results/figures/psd_vs_standard.png",
+            results_path("figures/psd_vs_standard.png"),
             caption="../report/psd_vs_standard.rst",
             category="1. Track irregularity",
         ),
@@ -64,6 +64,6 @@ rule plot_psd_vs_standard:
         psd=config["psd"],
         version=MODEL_VERSION,
     log:
-        "logs/psd/plot_psd_vs_standard.log",
+        log_path("psd/plot_psd_vs_standard.log"),
     script:
         "../scripts/plot_psd_vs_standard.py"

@@ -1,14 +1,14 @@
 # Stage: study aggregation, reliability and the report (issue 7; docs/studies.md, docs/reliability.md).
 # Reads every batch file of the design one at a time (memory independent of the sample count).
 
-STUDY_OUT = "results/study"
+STUDY_OUT = results_path("study")
 
 
 rule aggregate_study:
     """Extremes, history statistics, exceedance probabilities, Table 1, figures, report pages."""
     input:
         unpack(study_batch_files),
-        design="results/study/design.parquet",
+        design=results_path("study/design.parquet"),
     output:
         extremes=f"{STUDY_OUT}/extremes.parquet",
         history=f"{STUDY_OUT}/history_statistics.parquet",
@@ -21,7 +21,7 @@ rule aggregate_study:
             f"{STUDY_OUT}/report/summary.html",
             # the caption is the generated first page itself: the report's main page
             # (workflow/report/workflow.rst) embeds it
-            caption="../../results/study/summary.rst",
+            caption=report_caption_path(f"{STUDY_OUT}/summary.rst"),
             category="0. Summary",
         ),
         reliability_html=report(
@@ -75,7 +75,7 @@ rule aggregate_study:
         limits=config.get("limits"),
         version=MODEL_VERSION,
     log:
-        "logs/study/aggregate.log",
+        log_path("study/aggregate.log"),
     script:
         "../scripts/aggregate_study.py"
 

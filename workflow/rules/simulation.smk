@@ -17,7 +17,7 @@ from ttbpipe.study.samples import resolve_simulation as _study_resolve_simulatio
 
 STUDY_SIMULATION = _study_resolve_simulation(config.get("simulation"))
 STUDY_SCENARIOS = _study_resolve_scenarios(config["study"])
-STUDY_BATCH_ROOT = "results/study/batches"
+STUDY_BATCH_ROOT = results_path("study/batches")
 _STUDY_HORIZONS = [float(h) for h in TIPM.get("forecast", {}).get("horizons_months", [6, 12])]
 STUDY = config["study"]
 if STUDY_SCENARIOS["forecast"]["enabled"] and len(CAMPAIGNS) < 2:
@@ -42,9 +42,9 @@ def study_design_inputs(wildcards) -> dict[str, str]:
     """TIPM tables the design needs: the latest campaign's weights, the forecast states."""
     inputs = {}
     if STUDY_LABELS["irregularity"]:
-        inputs["weights"] = f"results/tipm/selection/{TIPM_LAST}.weights.parquet"
+        inputs["weights"] = f"{RESULTS}/tipm/selection/{TIPM_LAST}.weights.parquet"
     if STUDY_LABELS["forecast"]:
-        inputs["states"] = "results/tipm/forecast_states.parquet"
+        inputs["states"] = results_path("tipm/forecast_states.parquet")
     if STUDY_LABELS["irregularity_mc"]:   # case 3: the pooled PSD population of the latest campaign
         inputs["population"] = tipm_population_psds(type("W", (), {"date": TIPM_LAST}))
     return inputs
@@ -55,14 +55,14 @@ checkpoint study_design:
     input:
         unpack(study_design_inputs),
     output:
-        "results/study/design.parquet",
+        results_path("study/design.parquet"),
     params:
         study=STUDY,
         latest_campaign=TIPM_LAST,
         horizons_months=_STUDY_HORIZONS,
         version=MODEL_VERSION,
     log:
-        "logs/study/design.log",
+        log_path("study/design.log"),
     script:
         "../scripts/study_design.py"
 
@@ -73,11 +73,11 @@ def study_batch_inputs(wildcards) -> dict[str, str]:
     if kind is None:
         raise WorkflowError(f"unknown study scenario {wildcards.scenario!r}; the configured ones "
                             f"are {sorted(STUDY_KIND)}")
-    inputs = {"design": "results/study/design.parquet"}
+    inputs = {"design": results_path("study/design.parquet")}
     if kind == "irregularity":
-        inputs["profiles"] = f"results/tipm/profiles/{TIPM_LAST}.parquet"
+        inputs["profiles"] = f"{RESULTS}/tipm/profiles/{TIPM_LAST}.parquet"
     elif kind == "forecast":
-        inputs["profiles"] = "results/tipm/forecast_profiles.parquet"
+        inputs["profiles"] = results_path("tipm/forecast_profiles.parquet")
     elif kind == "irregularity_mc":
         inputs["population"] = tipm_population_psds(type("W", (), {"date": TIPM_LAST}))
     return inputs
@@ -102,7 +102,7 @@ rule simulate_batch:
         version=MODEL_VERSION,
     threads: _STUDY_THREADS
     log:
-        "logs/study/batches/{scenario}/{first}-{last}.log",
+        log_path("study/batches/{scenario}/{first}-{last}.log"),
     script:
         "../scripts/simulate_batch.py"
 

@@ -16,7 +16,7 @@ def tipm_population_psds(wildcards) -> list[str]:
     """PSD tables of the campaigns forming campaign {date}'s population (never a later one)."""
     dates = _tipm_population_dates(list(CAMPAIGNS), wildcards.date,
                                    TIPM.get("population_campaigns", "all"))
-    return [f"results/psd/{d}.parquet" for d in dates]
+    return [f"{RESULTS}/psd/{d}.parquet" for d in dates]
 
 
 rule tipm_select:
@@ -25,17 +25,17 @@ rule tipm_select:
     input:
         tipm_population_psds,
     output:
-        selection="results/tipm/selection/{date}.parquet",
-        weights="results/tipm/selection/{date}.weights.parquet",
-        metrics="results/tipm/selection/{date}.metrics.parquet",
-        profiles="results/tipm/profiles/{date}.parquet",
+        selection=results_path("tipm/selection/{date}.parquet"),
+        weights=results_path("tipm/selection/{date}.weights.parquet"),
+        metrics=results_path("tipm/selection/{date}.metrics.parquet"),
+        profiles=results_path("tipm/profiles/{date}.parquet"),
     params:
         tipm=TIPM,
         psd=config["psd"],
         seed=config["study"]["seed"],
         version=MODEL_VERSION,
     log:
-        "logs/tipm/select/{date}.log",
+        log_path("tipm/select/{date}.log"),
     script:
         "../scripts/tipm_select.py"
 
@@ -45,13 +45,13 @@ rule tipm_distribution:
     input:
         tipm_population_psds,
     output:
-        fits="results/tipm/distribution/{date}.parquet",
-        summary="results/tipm/distribution/{date}.summary.parquet",
+        fits=results_path("tipm/distribution/{date}.parquet"),
+        summary=results_path("tipm/distribution/{date}.summary.parquet"),
     params:
         psd=config["psd"],
         version=MODEL_VERSION,
     log:
-        "logs/tipm/distribution/{date}.log",
+        log_path("tipm/distribution/{date}.log"),
     script:
         "../scripts/tipm_distribution.py"
 
@@ -59,15 +59,15 @@ rule tipm_distribution:
 rule tipm_evolution:
     """Spectral evolution model (eqs. 50-53) fitted on every campaign."""
     input:
-        expand("results/psd/{date}.parquet", date=CAMPAIGNS),
+        expand(results_path("psd/{date}.parquet"), date=CAMPAIGNS),
     output:
-        "results/tipm/evolution.parquet",
+        results_path("tipm/evolution.parquet"),
     params:
         tipm=TIPM,
         psd=config["psd"],
         version=MODEL_VERSION,
     log:
-        "logs/tipm/evolution.log",
+        log_path("tipm/evolution.log"),
     script:
         "../scripts/tipm_evolution.py"
 
@@ -75,16 +75,16 @@ rule tipm_evolution:
 rule tipm_forecast:
     """Forecast (eqs. 54, 56) of the latest campaign's sections (or TIPM sets) and profiles."""
     input:
-        model="results/tipm/evolution.parquet",
-        selection=f"results/tipm/selection/{TIPM_LAST}.parquet",
-        weights=f"results/tipm/selection/{TIPM_LAST}.weights.parquet",
-        latest_psd=f"results/psd/{TIPM_LAST}.parquet",
+        model=results_path("tipm/evolution.parquet"),
+        selection=f"{RESULTS}/tipm/selection/{TIPM_LAST}.parquet",
+        weights=f"{RESULTS}/tipm/selection/{TIPM_LAST}.weights.parquet",
+        latest_psd=f"{RESULTS}/psd/{TIPM_LAST}.parquet",
     output:
-        forecast="results/tipm/forecast.parquet",
-        states="results/tipm/forecast_states.parquet",
-        profiles="results/tipm/forecast_profiles.parquet",
+        forecast=results_path("tipm/forecast.parquet"),
+        states=results_path("tipm/forecast_states.parquet"),
+        profiles=results_path("tipm/forecast_profiles.parquet"),
         figure=report(
-            "results/figures/tipm_forecast_spectra.png",
+            results_path("figures/tipm_forecast_spectra.png"),
             caption="../report/tipm_forecast_spectra.rst",
             category="2. TIPM and spectral evolution",
         ),
@@ -95,7 +95,7 @@ rule tipm_forecast:
         base_date=TIPM_LAST,
         version=MODEL_VERSION,
     log:
-        "logs/tipm/forecast.log",
+        log_path("tipm/forecast.log"),
     script:
         "../scripts/tipm_forecast.py"
 
@@ -103,13 +103,13 @@ rule tipm_forecast:
 rule tipm_validate:
     """Hold-out validation: fit on all but the last campaigns, forecast them, score coverage."""
     input:
-        expand("results/psd/{date}.parquet", date=CAMPAIGNS),
+        expand(results_path("psd/{date}.parquet"), date=CAMPAIGNS),
     output:
-        coverage="results/tipm/validation/coverage.parquet",
-        tqi="results/tipm/validation/tqi.parquet",
-        summary="results/tipm/validation/summary.json",
+        coverage=results_path("tipm/validation/coverage.parquet"),
+        tqi=results_path("tipm/validation/tqi.parquet"),
+        summary=results_path("tipm/validation/summary.json"),
         figure=report(
-            "results/figures/tipm_forecast.png",
+            results_path("figures/tipm_forecast.png"),
             caption="../report/tipm_forecast.rst",
             category="2. TIPM and spectral evolution",
         ),
@@ -119,7 +119,7 @@ rule tipm_validate:
         seed=config["study"]["seed"],
         version=MODEL_VERSION,
     log:
-        "logs/tipm/validate.log",
+        log_path("tipm/validate.log"),
     script:
         "../scripts/tipm_validate.py"
 
@@ -128,17 +128,17 @@ rule tipm_figures:
     """PSD percentile bands and the selected sets against the population (latest campaign)."""
     input:
         psd=lambda wildcards: tipm_population_psds(wildcards),
-        selection="results/tipm/selection/{date}.parquet",
-        weights="results/tipm/selection/{date}.weights.parquet",
-        metrics="results/tipm/selection/{date}.metrics.parquet",
+        selection=results_path("tipm/selection/{date}.parquet"),
+        weights=results_path("tipm/selection/{date}.weights.parquet"),
+        metrics=results_path("tipm/selection/{date}.metrics.parquet"),
     output:
         bands=report(
-            "results/figures/tipm_psd_bands_{date}.png",
+            results_path("figures/tipm_psd_bands_{date}.png"),
             caption="../report/tipm_psd_bands.rst",
             category="2. TIPM and spectral evolution",
         ),
         fidelity=report(
-            "results/figures/tipm_selection_{date}.png",
+            results_path("figures/tipm_selection_{date}.png"),
             caption="../report/tipm_selection.rst",
             category="2. TIPM and spectral evolution",
         ),
@@ -146,7 +146,7 @@ rule tipm_figures:
         psd=config["psd"],
         version=MODEL_VERSION,
     log:
-        "logs/tipm/figures/{date}.log",
+        log_path("tipm/figures/{date}.log"),
     script:
         "../scripts/tipm_figures.py"
 
@@ -154,15 +154,15 @@ rule tipm_figures:
 def tipm_targets() -> list[str]:
     """Final TIPM outputs: every campaign's selection and profiles, the latest campaign's
     distribution fit and figures, the forecast and the hold-out validation."""
-    targets = expand("results/tipm/profiles/{date}.parquet", date=CAMPAIGNS)
+    targets = expand(results_path("tipm/profiles/{date}.parquet"), date=CAMPAIGNS)
     targets += [
-        f"results/tipm/distribution/{TIPM_LAST}.parquet",
-        f"results/figures/tipm_psd_bands_{TIPM_LAST}.png",
-        f"results/figures/tipm_selection_{TIPM_LAST}.png",
+        f"{RESULTS}/tipm/distribution/{TIPM_LAST}.parquet",
+        f"{RESULTS}/figures/tipm_psd_bands_{TIPM_LAST}.png",
+        f"{RESULTS}/figures/tipm_selection_{TIPM_LAST}.png",
     ]
     if len(CAMPAIGNS) >= 2:
-        targets.append("results/tipm/forecast.parquet")
+        targets.append(results_path("tipm/forecast.parquet"))
     holdout = int(TIPM.get("validation", {}).get("holdout_campaigns", 12))
     if len(CAMPAIGNS) >= holdout + 3:
-        targets.append("results/tipm/validation/summary.json")
+        targets.append(results_path("tipm/validation/summary.json"))
     return targets
