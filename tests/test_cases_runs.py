@@ -5,19 +5,16 @@
 * Monte Carlo irregularity profiles (case 3's MCM): a section's profile has the section's
   variance (discrete Parseval);
 * tiny designs through the batch runner (every new kind, batch-size independence);
-* case 1: rail displacement under a wheel converges with the monitor spacing; the small case-1
-  workflow under Snakemake in a scratch copy.
+* case 1: rail displacement under a wheel converges with the monitor spacing.
+
+The small variants of the four cases under Snakemake: tests/test_cases_small.py.
 """
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
 
 from ttbpipe.study.samples import field_factors, mc_profile
 
@@ -137,37 +134,6 @@ def test_rail_displacement_under_the_wheel_converges_with_monitor_spacing():
     assert np.max(np.abs(a - b)) < 0.02 * np.max(np.abs(b))
     assert b.min() < 0      # the wheel presses the rail down (z up)
     assert layout["span"] == 1
-
-
-@pytest.mark.slow
-def test_case1_small_workflow_under_snakemake(tmp_path):
-    """Case-1 rules end to end in a scratch copy (one span, one car, three speeds): the sweep
-    table has every speed, the resonance table uses eq. 55, the three figures exist."""
-    from test_workflow import _copy_repository
-
-    _copy_repository(tmp_path)
-    case = {"results_dir": "results/tiny_case1", "logs_dir": "logs/tiny_case1",
-            "case": {"name": "case1", "sweep": {"speeds_kmh": [200, 400, 100],
-                                                "history_speed_kmh": 300, "history_car": 1,
-                                                "batch_size": 2}},
-            "structure": TINY_STRUCTURE,
-            "simulation": {"train": {"composition": ["trailer"]}, "end_x_m": 62.0}}
-    (tmp_path / "tiny_case1.yaml").write_text(yaml.safe_dump(case))
-    proc = subprocess.run([sys.executable, "-m", "snakemake", "--cores", "2", "--configfile",
-                           "tiny_case1.yaml"], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=240)
-    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    out = tmp_path / "results" / "tiny_case1" / "paper_comparison"   # the case's results_dir
-    sweep = pd.read_parquet(out / "sweep.parquet")
-    assert sweep["speed_kmh"].tolist() == [200.0, 300.0, 400.0]
-    for name in ("fig06_rail_displacement_under_wheel.png", "fig07_girder_midspan.png",
-                 "fig08_maxima_vs_speed.png"):
-        assert (out / "figures" / name).stat().st_size > 1000
-    res = pd.read_parquet(out / "resonance.parquet")
-    assert (res["predicted_kmh"] == 3.6 * res["frequency_hz"] * 25.0 / res["order"]).all()
-    # only the case's jobs ran, and only under its own results_dir and logs_dir
-    assert sorted(p.name for p in (tmp_path / "results").iterdir()) == ["tiny_case1"]
-    assert sorted(p.name for p in (tmp_path / "logs").iterdir()) == ["tiny_case1"]
 
 
 def test_wheel_lift_is_reported_not_failed():
