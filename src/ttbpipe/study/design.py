@@ -117,20 +117,15 @@ def scenario_labels(study: Mapping[str, Any], latest_campaign: str,
         levels = forecast_levels(sc["forecast"])
         out["forecast"] = (dates if levels is None else
                            [forecast_label(d, p) for d in dates for p in levels])
-    if sc["fields"]["enabled"]:
-        conditions = list(sc["fields"]["conditions"])
+    for kind in ("fields", "fields_mc"):
+        if not sc[kind]["enabled"]:
+            continue
+        conditions = list(sc[kind]["conditions"])
         bad = [c for c in conditions if c not in FIELD_CONDITIONS]
         if bad:
-            raise ValueError(f"study.scenarios.fields.conditions: {bad}; expected a subset of "
+            raise ValueError(f"study.scenarios.{kind}.conditions: {bad}; expected a subset of "
                              f"{list(FIELD_CONDITIONS)}")
-        out["fields"] = conditions
-    if sc["fields_mc"]["enabled"]:
-        conditions = list(sc["fields_mc"]["conditions"])
-        bad = [c for c in conditions if c not in FIELD_CONDITIONS]
-        if bad:
-            raise ValueError(f"study.scenarios.fields_mc.conditions: {bad}; expected a subset of "
-                             f"{list(FIELD_CONDITIONS)}")
-        out["fields_mc"] = [f"{c}_mc" for c in conditions]
+        out[kind] = conditions if kind == "fields" else [f"{c}_mc" for c in conditions]
     if sc["irregularity_mc"]["enabled"]:
         out["irregularity_mc"] = [MC_IRREGULARITY]
     labels = [lab for v in out.values() for lab in v]
