@@ -176,7 +176,10 @@ def synthetic_population(n_sections: int, frequency_per_m: np.ndarray, mean_psd:
     mean_psd = np.asarray(mean_psd, dtype=float)
     n_ch = len(channels)
     corr = np.full((n_ch, n_ch), channel_correlation) + (1 - channel_correlation) * np.eye(n_ch)
-    z = rng.multivariate_normal(np.zeros(n_ch), corr, size=n_sections)
+    # Cholesky, not numpy's default SVD: the equicorrelation matrix has a repeated eigenvalue, so
+    # its singular vectors (and the draws) depend on the LAPACK kernel of the machine (OpenBLAS
+    # picks AVX-512 or AVX2 code at run time); the Cholesky factor is unique.
+    z = rng.multivariate_normal(np.zeros(n_ch), corr, size=n_sections, method="cholesky")
     levels = np.exp(level_sigma_log * z - 0.5 * level_sigma_log ** 2)
     psd = mean_psd[None, :, :] * levels[:, None, :]
     if welch_dof is not None:
