@@ -15,6 +15,7 @@ at a few tens of seconds. What is checked and against what:
 
 import copy
 import os
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -113,6 +114,42 @@ def test_dask_local_cluster_gives_identical_results(reference, tmp_path):
     e4, h4 = read_all(tmp_path, design, 4)
     pd.testing.assert_frame_equal(extremes, e4, check_exact=True)
     pd.testing.assert_frame_equal(histories, h4, check_exact=True)
+
+
+_THREADS_SCRIPT = """
+import sys
+sys.path.insert(0, {tests!r})
+from test_study_batch import CONFIG, tiny_design
+from ttbpipe.study.batch import simulate_design
+design = tiny_design()
+simulate_design(design[design["sample_index"] <= 1], CONFIG, {{}}, {root!r}, batch_size=2,
+                executor="local")
+"""
+
+
+def test_results_do_not_depend_on_the_blas_thread_count(reference, tmp_path):
+    """The same batch in two fresh processes, one started with every BLAS/OpenMP/numba pool at
+    one thread, the other at two (OPENBLAS_NUM_THREADS etc.): bit-identical tables, and equal
+    to the reference run of this module. Without ttbpipe.threads.single_threaded the static
+    solve's multi-threaded BLAS changed the static wheel load in its last digits (1e-5)."""
+    import subprocess
+    import sys
+
+    design, root, extremes, histories = reference
+    tables = []
+    for threads in ("1", "2"):
+        out = tmp_path / f"threads_{threads}"
+        env = {**os.environ, **{k: threads for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
+                                                        "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}}
+        subprocess.run([sys.executable, "-c", _THREADS_SCRIPT.format(
+            tests=str(Path(__file__).parent), root=str(out))], env=env, check=True)
+        e, h = batch_paths(str(out), "C2", 0, 1)
+        tables.append((pd.read_parquet(e), pd.read_parquet(h)))
+    for one, two in zip(*tables):
+        pd.testing.assert_frame_equal(one, two, check_exact=True)
+    e_ref, h_ref = batch_paths(str(root), "C2", 0, 1)
+    pd.testing.assert_frame_equal(tables[0][0], pd.read_parquet(e_ref), check_exact=True)
+    pd.testing.assert_frame_equal(tables[0][1], pd.read_parquet(h_ref), check_exact=True)
 
 
 def test_interrupted_batch_writes_nothing_and_rerun_does_only_the_missing(reference, tmp_path):

@@ -58,6 +58,7 @@ import pandas as pd
 from numba import njit
 
 from ..channels import rails_from_spectral
+from ..threads import pinned
 from ..structure.kernels import (StructurePacked, _add_rail_point_force,
                                  _add_rail_point_force_at, _rail_point_kinematics_at,
                                  _structure_accelerations, _zhai_predict)
@@ -776,6 +777,7 @@ def summarise(setup: CoupledSetup, raw: RawResult, table: pd.DataFrame) -> dict:
     return summary
 
 
+@pinned
 def run_coupled(case_config: Mapping[str, Any]) -> tuple[pd.DataFrame, dict]:
     """Run one coupled case: (time-history table, summary dict). See the module docstring."""
     setup = prepare(case_config)

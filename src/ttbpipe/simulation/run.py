@@ -11,6 +11,7 @@ import pandas as pd
 from ..structure import apply_factors, build_structure, carrier_positions
 from ..structure.assembly import CARRIER_PARAMETERS, PARAMETER_CARRIER
 from ..structure.moving_loads import build_loads, default_duration, simulate
+from ..threads import pinned
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +50,7 @@ def property_factors(props_cfg: Mapping[str, Any] | None, model) -> dict[str, np
     return factors
 
 
+@pinned
 def run_moving_loads(case: Mapping[str, Any]) -> tuple[pd.DataFrame, dict]:
     """Build the structure, apply property factors, run the moving loads; (table, summary)."""
     model = build_structure(case.get("structure") or {})

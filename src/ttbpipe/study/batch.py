@@ -29,14 +29,12 @@ from typing import Any, Callable, Mapping, Sequence
 import pandas as pd
 
 from ..io import write_table
+from ..threads import WORKER_ENV
 from .samples import resolve_simulation, run_sample
 
 log = logging.getLogger(__name__)
 
 SCHEDULER_ENV = "TTBPIPE_DASK_SCHEDULER"
-#: Environment of Dask workers: one thread per worker process for numba and BLAS.
-WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-              "MKL_NUM_THREADS": "1"}
 
 
 class Progress:

@@ -22,6 +22,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
+from ..threads import pinned
 from .design import STREAM_ID, scenario_key
 
 log = logging.getLogger(__name__)
@@ -300,6 +301,7 @@ def history_from_run(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) 
     return pd.DataFrame(out)
 
 
+@pinned
 def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any],
                structure: Mapping[str, Any], fields: Mapping[str, Any] | None,
                profiles: Mapping[str, str]) -> tuple[dict[str, Any], pd.DataFrame]:

@@ -1,0 +1,58 @@
+"""One thread for the numerical work of a sample: results independent of the thread settings.
+
+A sample's results must depend only on the study seed and the sample's index, never on the
+batch size, core count, thread count or scheduler. Multi-threaded BLAS/LAPACK (OpenBLAS, MKL,
+BLIS) splits dot products, matrix products and factorisations across threads and sums the
+partial results in an order that depends on the thread count, so the last bits of a static
+solve or an eigen-decomposition change with ``OPENBLAS_NUM_THREADS`` (measured: the static wheel
+load differed by 1e-5 relative between a run inheriting two BLAS threads and a Dask worker
+pinned to one). Every simulation path (local batches, Dask workers, ``ttbpipe simulate``)
+therefore runs its numerical work inside :func:`single_threaded`, which limits every BLAS and
+OpenMP pool loaded in the process to one thread with threadpoolctl (it acts on the libraries at
+run time, whatever the environment variables said when they were loaded) and sets numba's
+thread count to one for any parallel kernel. Parallelism comes from running samples side by side
+(Snakemake jobs, Dask workers), which is also faster for these memory-bound small problems.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+from typing import Any, Callable, Iterator, TypeVar
+
+#: Threads of the numerical work of one sample (BLAS, OpenMP, numba).
+SAMPLE_THREADS = 1
+
+#: Environment of worker processes started by ttbpipe (Dask LocalCluster): set before numpy,
+#: scipy and numba load, so that their pools start at one thread (belt and braces beside
+#: :func:`single_threaded`, which every sample still enters).
+WORKER_ENV = {"NUMBA_NUM_THREADS": str(SAMPLE_THREADS), "OMP_NUM_THREADS": str(SAMPLE_THREADS),
+              "OPENBLAS_NUM_THREADS": str(SAMPLE_THREADS), "MKL_NUM_THREADS": str(SAMPLE_THREADS)}
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+@contextlib.contextmanager
+def single_threaded() -> Iterator[None]:
+    """Limit BLAS/OpenMP pools (threadpoolctl) and numba to :data:`SAMPLE_THREADS` inside."""
+    import numba
+    from threadpoolctl import threadpool_limits
+
+    previous = numba.get_num_threads()
+    with threadpool_limits(limits=SAMPLE_THREADS):
+        numba.set_num_threads(min(SAMPLE_THREADS, numba.config.NUMBA_NUM_THREADS))
+        try:
+            yield
+        finally:
+            numba.set_num_threads(previous)
+
+
+def pinned(function: F) -> F:
+    """Decorator: run ``function`` inside :func:`single_threaded`."""
+
+    @functools.wraps(function)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with single_threaded():
+            return function(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
