@@ -211,7 +211,7 @@ def test_config_limits_section_matches_schema_and_code():
 
     root = Path(__file__).parents[1]
     config = yaml.safe_load((root / "config" / "config.yaml").read_text())
-    schema = yaml.safe_load((root / "workflow" / "schemas" / "config.schema.yaml").read_text())
+    schema = yaml.safe_load((root / "src" / "ttbpipe" / "schemas" / "study.schema.yaml").read_text())
     block = schema["properties"]["limits"]
     jsonschema.Draft202012Validator(block).validate(config["limits"])
     names = {lim.name for lim in L.default_limits()}

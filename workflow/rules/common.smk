@@ -5,16 +5,25 @@ import os
 import re
 from pathlib import Path
 
-from snakemake.utils import validate
-
 import ttbpipe
+from ttbpipe.configuration import ConfigurationError as _ConfigurationError
+from ttbpipe.configuration import validate_scale_overlays as _validate_scale_overlays
+from ttbpipe.configuration import validate_study_config as _validate_study_config
 
-# Paper case studies (config/case*.yaml, issue 8): `--config scale=small` merges the case file's
-# small: overlay before validation (ttbpipe.study.cases.apply_scale).
+# Paper case studies (config/case*.yaml): `--config scale=small` merges the case file's small:
+# overlay before validation (ttbpipe.study.cases.apply_scale).
 from ttbpipe.study.cases import apply_scale as _apply_case_scale
 
-_apply_case_scale(config)
-validate(config, schema="../schemas/config.schema.yaml")
+# One schema for every section (src/ttbpipe/schemas/study.schema.yaml, with the case schema's
+# structure and train): unknown keys anywhere are errors naming the key and the closest valid
+# one; the schema's defaults are filled in, so every table's provenance records what ran.
+_CONFIG_SOURCE = ", ".join(map(str, workflow.configfiles)) or "config"
+try:
+    _validate_scale_overlays(config, source=_CONFIG_SOURCE)
+    _apply_case_scale(config)
+    _validate_study_config(config, source=_CONFIG_SOURCE)
+except (_ConfigurationError, ValueError) as _exc:
+    raise WorkflowError(str(_exc)) from None
 
 # Package code under src/ is not tracked by Snakemake for reruns: every rule passes this through
 # `params:` so that a new ttbpipe version reruns what it made.
@@ -23,8 +32,8 @@ MODEL_VERSION = ttbpipe.__version__
 # Where a study writes (config `results_dir`, `logs_dir`): each paper case has its own
 # (config/case<N>.yaml: results/case<N>, logs/case<N>) so that cases and the default study can
 # share one checkout without overwriting each other's outputs.
-RESULTS = config.get("results_dir", "results").rstrip("/")
-LOGS = config.get("logs_dir", "logs").rstrip("/")
+RESULTS = config["results_dir"].rstrip("/")
+LOGS = config["logs_dir"].rstrip("/")
 
 
 def results_path(relative: str) -> str:

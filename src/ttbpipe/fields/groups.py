@@ -24,6 +24,8 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import optimize, special, stats
 
+from ..configuration import section_defaults
+
 # Carrier kinds: where along the line each parameter lives.
 CARRIER_KINDS = ("rail_element", "fastener", "slab_element", "girder_element")
 
@@ -122,8 +124,9 @@ class ParameterGroup:
 
 def build_groups(fields_config: Mapping[str, Any]) -> list[ParameterGroup]:
     """Configured, enabled groups from the ``fields:`` section (config/config.yaml)."""
-    defaults = {"kernel": fields_config.get("kernel", "exponential"),
-                "correlation_length_m": fields_config.get("correlation_length_m", 10.0)}
+    schema_defaults = section_defaults("fields")   # the study schema: their only home
+    defaults = {key: fields_config.get(key, schema_defaults[key])
+                for key in ("kernel", "correlation_length_m")}
     groups = []
     for name, gconf in (fields_config.get("groups") or {}).items():
         if name not in GROUP_DEFINITIONS:

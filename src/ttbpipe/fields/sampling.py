@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import linalg
 
+from ..configuration import validate_section
 from .covariance import correlation_matrix
 from .groups import ParameterGroup, build_groups, carrier_positions, line_length_m, segment_index
 from .kle import KarhunenLoeve
@@ -176,9 +177,10 @@ class FieldSampler:
     def __init__(self, fields_config: Mapping[str, Any], study_seed: int, *,
                  positions: Mapping[str, np.ndarray] | None = None,
                  method: str | None = None) -> None:
-        self.config = dict(fields_config)
+        # validated, defaults filled from the study schema (their only home)
+        self.config = validate_section(fields_config, "fields")
         self.study_seed = int(study_seed)
-        self.method = method or self.config.get("method", "kle")
+        self.method = method or self.config["method"]
         geometry = self.config.get("geometry", {})
         if positions is None:
             positions = carrier_positions(geometry)
@@ -195,10 +197,10 @@ class FieldSampler:
                                  f"{group.carrier!r}")
             self.samplers.append(GroupFieldSampler(
                 group, self.positions[group.carrier], method=self.method,
-                variance_fraction=float(self.config.get("variance_fraction", 0.95)),
-                rescale_variance=bool(self.config.get("rescale_variance", True)),
-                segments=int(self.config.get("segments", 1)), total_length_m=total,
-                quadrature_nodes=int(self.config.get("quadrature_nodes", 64))))
+                variance_fraction=float(self.config["variance_fraction"]),
+                rescale_variance=bool(self.config["rescale_variance"]),
+                segments=int(self.config["segments"]), total_length_m=total,
+                quadrature_nodes=int(self.config["quadrature_nodes"])))
 
     @property
     def parameters(self) -> list[str]:
@@ -276,13 +278,13 @@ def sample_study(config: Mapping[str, Any], out_path: str | os.PathLike[str], *,
     if "fields" not in config:
         raise ValueError("configuration has no 'fields:' section; copy the one in "
                          "config/config.yaml")
-    fields_config = config["fields"]
+    fields_config = validate_section(config["fields"], "fields")
     positions = None
     if fields_config.get("geometry", {}).get("source", "fields") == "structure":
         positions = positions_from_structure(config.get("structure"))
     sampler = FieldSampler(fields_config, config["study"]["seed"], method=method,
                            positions=positions)
-    n = int(n_samples if n_samples is not None else fields_config.get("samples", 50))
+    n = int(n_samples if n_samples is not None else fields_config["samples"])
     if n < 1:
         raise ValueError(f"number of samples must be >= 1, got {n}")
     df = sampler.table(range(first_sample, first_sample + n))

@@ -36,6 +36,7 @@ import pandas as pd
 from scipy import signal
 
 from ..channels import INSPECTION_COLUMNS, SPECTRAL_CHANNELS, spectral_from_inspection
+from ..configuration import section_defaults
 
 __all__ = ["welch_psd", "section_psds", "estimate_campaign_psd", "sample_spacing_m",
            "PSD_COLUMNS", "DEFAULTS"]
@@ -46,15 +47,11 @@ log = logging.getLogger(__name__)
 PSD_COLUMNS: tuple[str, ...] = ("section", "section_start_m", "section_end_m", "channel",
                                 "spatial_frequency_per_m", "psd_mm2_m")
 
-#: estimator defaults (mirrors the ``psd:`` section of config/config.yaml)
-DEFAULTS: dict[str, Any] = {
-    "section_length_m": 1000.0,
-    "segment_length_m": 1000.0,
-    "overlap": 0.5,
-    "window": "hann",
-    "detrend": "linear",
-    "wavelength_band_m": (2.0, 200.0),
-}
+#: estimator defaults: the study schema's ``psd:`` defaults (their only home), without the
+#: reference spectrum (a figure setting)
+DEFAULTS: dict[str, Any] = {k: (tuple(v) if isinstance(v, list) else v)
+                            for k, v in section_defaults("psd").items()
+                            if k != "reference_spectrum"}
 
 
 def _segment_points(segment_length_m: float, dx_m: float, n_available: int,

@@ -40,6 +40,8 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
+from ..configuration import section_defaults, validate_section
+
 log = logging.getLogger(__name__)
 
 #: Fixed stream number of the simulation stage in the study's seed tree.
@@ -54,23 +56,13 @@ FIELD_CONDITIONS = ("C1", "C2", "C3", "C4", "all")
 DESIGN_COLUMNS = ("scenario", "kind", "sample_index", "weight", "profile_index", "condition",
                   "seed_entropy")
 
-DEFAULT_SCENARIOS: dict[str, dict[str, Any]] = {
-    "irregularity": {"enabled": True, "single_excitation": True},
-    "forecast": {"enabled": True, "level": 0.5, "horizons_months": None},
-    "fields": {"enabled": True, "conditions": ["C1", "C2", "C3", "C4"], "samples": 10},
-    "fields_mc": {"enabled": False, "conditions": ["C4"], "samples": 100},
-    "irregularity_mc": {"enabled": False, "samples": 100},
-}
+#: Defaults of ``study.scenarios``: the study schema's (its only home).
+DEFAULT_SCENARIOS: dict[str, dict[str, Any]] = section_defaults("study", "scenarios")
 
 
 def resolve_scenarios(study: Mapping[str, Any] | None) -> dict[str, dict[str, Any]]:
-    """``study.scenarios`` with missing keys filled from :data:`DEFAULT_SCENARIOS`."""
-    given = dict((study or {}).get("scenarios") or {})
-    unknown = sorted(set(given) - set(SCENARIO_KINDS))
-    if unknown:
-        raise ValueError(f"study.scenarios: unknown scenario kind(s) {unknown}; expected "
-                         f"{list(SCENARIO_KINDS)}")
-    return {k: {**v, **dict(given.get(k) or {})} for k, v in DEFAULT_SCENARIOS.items()}
+    """``study.scenarios`` validated against the study schema, defaults filled in."""
+    return validate_section((study or {}).get("scenarios"), "study", "scenarios")
 
 
 def scenario_key(label: str) -> int:
@@ -217,13 +209,13 @@ def build_design(study: Mapping[str, Any], *, latest_campaign: str,
                                  f"tipm.forecast.levels {sorted(forecast_states['level'].unique())}")
             blocks.append(_rows(label, "forecast", block["sample_index"], block["weight"],
                                 block["profile_index"], "nominal", seed))
-    n_fields = int(sc["fields"].get("samples", 10))
+    n_fields = int(sc["fields"]["samples"])
     for condition in labels["fields"]:
         if n_fields < 1:
             raise ValueError(f"study.scenarios.fields.samples must be >= 1, got {n_fields}")
         blocks.append(_rows(condition, "fields", np.arange(n_fields), np.ones(n_fields),
                             np.full(n_fields, -1), condition, seed))
-    n_mc = int(sc["fields_mc"].get("samples", 100))
+    n_mc = int(sc["fields_mc"]["samples"])
     for label in labels["fields_mc"]:
         if n_mc < 1:
             raise ValueError(f"study.scenarios.fields_mc.samples must be >= 1, got {n_mc}")
@@ -233,7 +225,7 @@ def build_design(study: Mapping[str, Any], *, latest_campaign: str,
         if n_population_sections is None:
             raise ValueError("scenario irregularity_mc needs the number of sections of the "
                              f"population of campaign {latest_campaign}")
-        n = int(sc["irregularity_mc"].get("samples", 100))
+        n = int(sc["irregularity_mc"]["samples"])
         if n < 1:
             raise ValueError(f"study.scenarios.irregularity_mc.samples must be >= 1, got {n}")
         sections = [mc_section(seed, i, n_population_sections) for i in range(n)]

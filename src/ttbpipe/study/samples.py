@@ -22,43 +22,22 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
+from ..configuration import section_defaults, validate_section
 from ..threads import pinned
 from .design import STREAM_ID, scenario_key
 
 log = logging.getLogger(__name__)
 
-#: Defaults of the ``simulation:`` section (config/config.yaml documents each key).
-SIMULATION_DEFAULTS: dict[str, Any] = {
-    "train": {"composition": ["motor", "trailer", "motor"],
-              "contact": {"profile": "conical", "conicity": 0.04}},
-    "speed_kmh": 300.0,
-    "time_step_s": 1.0e-4,
-    "output_interval_s": 2.0e-3,
-    "end_x_m": None,
-    "irregularity": {"spectrum": "tbt3352", "dx_m": 0.25, "fade_in_m": 20.0, "lead_in_m": 20.0},
-    "deck_filter_hz": 30.0,
-    "history": {"span": None, "wheel": "car1_ws1_left", "carbody_point": "car1_body_front"},
-    "batch_size": 4,
-    "executor": "local",
-    "dask": {"scheduler": None, "local_workers": 2},
-}
+#: Defaults of the ``simulation:`` section: the study schema's (its only home).
+SIMULATION_DEFAULTS: dict[str, Any] = section_defaults("simulation")
 
 PROFILE_CHANNELS = ("vertical_mm", "alignment_mm", "cross_level_mm", "gauge_mm")
 
 
 def resolve_simulation(section: Mapping[str, Any] | None) -> dict[str, Any]:
-    """``simulation:`` with missing keys (one level deep) filled from :data:`SIMULATION_DEFAULTS`."""
-    section = dict(section or {})
-    out: dict[str, Any] = {}
-    for key, default in SIMULATION_DEFAULTS.items():
-        if isinstance(default, dict) and key != "train":
-            out[key] = {**default, **dict(section.get(key) or {})}
-        else:
-            out[key] = copy.deepcopy(section.get(key, default))
-    unknown = sorted(set(section) - set(SIMULATION_DEFAULTS))
-    if unknown:
-        raise ValueError(f"simulation: unknown key(s) {unknown}")
-    return out
+    """``simulation:`` validated against the study schema, missing keys filled from its defaults
+    (unknown keys are an error naming the closest valid key)."""
+    return validate_section(section, "simulation")
 
 
 def mean_spectrum_seed(study_seed: int) -> int:

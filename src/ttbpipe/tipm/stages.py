@@ -1,8 +1,8 @@
 """Workflow stages of the TIPM: what each Snakemake script of workflow/rules/tipm.smk calls.
 
 Every function takes file paths and the ``tipm:`` / ``psd:`` configuration and returns tables;
-the scripts only read inputs and write outputs. Defaults: :data:`DEFAULTS` (mirrors the ``tipm:``
-section of config/config.yaml).
+the scripts only read inputs and write outputs. Defaults: :data:`DEFAULTS`, the study schema's
+``tipm:`` defaults.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from ..configuration import section_defaults, validate_section
 from ..io import read_table
 from .distribution import (FIT_COLUMNS, MIN_SECTIONS_FOR_FIT, SUMMARY_COLUMNS,
                            fit_ordinate_distributions, summarize_fits)
@@ -30,28 +31,13 @@ __all__ = ["DEFAULTS", "resolve_config", "load_population", "population_dates", 
 
 log = logging.getLogger(__name__)
 
-DEFAULTS: dict[str, Any] = {
-    "population_campaigns": "all",
-    "selection": {"method": "copula", "fraction": 0.1, "min_samples": 5, "max_samples": 100,
-                  "match_variance": True},
-    "profiles": {"length_m": 1000.0, "dx_m": 0.25},
-    "evolution": {"n_partitions": 5, "partition_scale": "log", "min_partition_count": 10},
-    "forecast": {"base": "sections", "horizons_months": [6, 12], "levels": [0.05, 0.5, 0.95],
-                 "monte_carlo_paths": 200},
-    "validation": {"holdout_campaigns": 12, "band": [0.05, 0.95], "monte_carlo_paths": 500},
-}
+#: Defaults of the ``tipm:`` section: the study schema's (its only home).
+DEFAULTS: dict[str, Any] = section_defaults("tipm")
 
 
 def resolve_config(tipm: Mapping[str, Any] | None) -> dict[str, Any]:
-    """``tipm:`` configuration with missing keys filled from :data:`DEFAULTS`."""
-    tipm = dict(tipm or {})
-    out: dict[str, Any] = {}
-    for key, default in DEFAULTS.items():
-        if isinstance(default, dict):
-            out[key] = {**default, **dict(tipm.get(key) or {})}
-        else:
-            out[key] = tipm.get(key, default)
-    return out
+    """``tipm:`` validated against the study schema, missing keys filled from its defaults."""
+    return validate_section(tipm, "tipm")
 
 
 def population_dates(all_dates: Sequence[str], date: str, window: str | int) -> list[str]:
