@@ -229,3 +229,41 @@ def test_aggregation_tables_report_pages_and_missing_samples(reference, tmp_path
     assert "<table" in (tmp_path / "study" / "report" / "summary.html").read_text()
     with pytest.raises(ValueError, match="C2/2"):
         aggregate_study([paths[0][0]], [paths[0][1]], design, config, out=tmp_path / "bad")
+
+
+def test_aggregation_refuses_stale_and_unreadable_batches(reference, tmp_path):
+    """ttbpipe.study.batch.verify_batches, which the workflow's aggregate step runs first: a
+    batch made with other settings (here simulation.deck_filter_hz) is named with the setting
+    that differs; a truncated file is named as unreadable instead of a raw pyarrow traceback;
+    both errors end with the command that remakes the files."""
+    import shutil
+
+    from ttbpipe.study.batch import StaleBatchError, simulate_batch, verify_batches
+    from ttbpipe.study.design import batch_rows
+    from ttbpipe.study.plan import batch_settings, settings_digest
+
+    design, _, _, _ = reference
+    settings = batch_settings(CONFIG, "fields", "test-code")
+    paths = batch_paths(str(tmp_path), "C2", 0, 1)
+    simulate_batch(batch_rows(design, "C2", 0, 1), CONFIG, {}, *paths, scenario="C2", first=0,
+                   last=1, settings=settings, settings_digest=settings_digest(settings))
+    verify_batches(paths, design[design["sample_index"] <= 1], {"C2": settings})
+
+    changed = copy.deepcopy(settings)
+    changed["simulation"]["deck_filter_hz"] = 25.0
+    with pytest.raises(StaleBatchError) as info:
+        verify_batches(paths, design[design["sample_index"] <= 1], {"C2": changed})
+    message = str(info.value)
+    assert paths[0] in message and paths[1] in message
+    assert "simulation.deck_filter_hz: 30.0 -> 25.0" in message
+    assert "Remake them: snakemake --cores 2 --forcerun " in message
+
+    truncated = tmp_path / "truncated.parquet"
+    shutil.copy(paths[0], truncated)
+    with open(truncated, "r+b") as f:
+        f.truncate(truncated.stat().st_size // 2)
+    with pytest.raises(StaleBatchError, match=rf"{truncated}: unreadable \(ArrowInvalid"):
+        verify_batches([truncated], design, {"C2": settings})
+
+    with pytest.raises(StaleBatchError, match=r"holds samples \[0, 1\] but the design of C2 has \[0\]"):
+        verify_batches([paths[0]], design[design["sample_index"] == 0], {"C2": settings})

@@ -53,17 +53,18 @@ def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
     _copy_repository(tmp_path)
     (tmp_path / "tiny.yaml").write_text(TINY_STUDY)
     env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
-    batches = tmp_path / "results" / "study" / "batches" / "C3"
+    root = tmp_path / "results" / "study" / "batches"   # <digest>/<scenario>/...
     proc = subprocess.Popen(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                             start_new_session=True)
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not list(batches.glob("extremes_*.parquet")):
+    while time.monotonic() < deadline and not list(root.glob("*/C3/extremes_*.parquet")):
         if proc.poll() is not None:
             pytest.fail("snakemake ended before the first batch:\n" + proc.stdout.read().decode()[-3000:])
         time.sleep(0.2)
     os.killpg(proc.pid, signal.SIGINT)
     proc.wait(timeout=60)
+    batches = next(root.glob("*/C3"))
     finished = {p.name: p.stat().st_mtime_ns for p in batches.glob("*.parquet")}
     assert finished, "no batch finished before the interruption"
     assert not (tmp_path / "results" / "study" / "extremes.parquet").exists(), \
@@ -99,3 +100,69 @@ def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
     workflow = pd.read_parquet(tmp_path / "results" / "study" / "extremes.parquet")
     pd.testing.assert_frame_equal(direct.reset_index(drop=True), workflow.reset_index(drop=True),
                                   check_exact=True, check_dtype=False)
+
+
+@pytest.mark.slow
+def test_batches_finished_after_a_killed_run_are_not_mixed_with_new_settings(tmp_path):
+    """Snakemake's own process killed (SIGKILL, as the OOM killer does) while batch jobs run:
+    the jobs finish untracked. After a simulation setting changes, the rerun must recompute
+    every batch (the batch paths carry the digest of the settings they depend on), and the
+    aggregate's provenance check must find only current batches. Then a truncated batch file
+    makes the aggregation stop with a message naming it, not a pyarrow traceback."""
+    import yaml
+
+    from ttbpipe.io import read_provenance
+
+    _copy_repository(tmp_path)
+    (tmp_path / "tiny.yaml").write_text(TINY_STUDY)
+    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+    batches = tmp_path / "results" / "study" / "batches"
+    proc = subprocess.Popen(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline and not list(batches.glob("*/C3/extremes_*.parquet")):
+        assert proc.poll() is None, "snakemake ended before the first batch"
+        time.sleep(0.2)
+    os.kill(proc.pid, signal.SIGKILL)          # Snakemake only: its batch jobs go on
+    proc.wait(timeout=30)
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline:         # until the orphaned jobs have finished
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.2)
+    old = sorted(batches.glob("*/C3/extremes_*.parquet"))
+    assert old, "no batch finished"
+    assert not (tmp_path / "results" / "study" / "extremes.parquet").exists()
+    old_digest = old[0].parent.parent.name
+
+    config = yaml.safe_load(TINY_STUDY)
+    config["simulation"]["deck_filter_hz"] = 25.0
+    (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(config))
+    subprocess.run(_cmd("--unlock"), cwd=tmp_path, env=env, check=True, capture_output=True)
+    rerun = subprocess.run(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,
+                           capture_output=True, text=True)
+    assert rerun.returncode == 0, rerun.stdout[-3000:] + rerun.stderr[-3000:]
+    log = rerun.stdout + rerun.stderr
+    assert len(re.findall(r"(?m)^(?:local)?rule simulate_batch:", log)) == 4, log[-3000:]
+    new = sorted(p for p in batches.glob("*/C3/extremes_*.parquet")
+                 if p.parent.parent.name != old_digest)
+    assert len(new) == 4
+    for path in new:
+        assert read_provenance(path)["settings"]["simulation"]["deck_filter_hz"] == 25.0
+    for path in old:                           # the stale ones are left alone, never read
+        assert read_provenance(path)["settings"]["simulation"]["deck_filter_hz"] == 30.0
+    aggregated = read_provenance(tmp_path / "results" / "study" / "extremes.parquet")
+    assert aggregated["config"]["simulation"]["deck_filter_hz"] == 25.0
+
+    with open(new[1], "r+b") as f:             # a batch file damaged on disk
+        f.truncate(new[1].stat().st_size // 2)
+    broken = subprocess.run(_cmd("results/study/extremes.parquet", "--forcerun",
+                                 "aggregate_study"), cwd=tmp_path, env=env,
+                            capture_output=True, text=True)
+    text = broken.stdout + broken.stderr
+    assert broken.returncode != 0
+    assert f"{new[1].relative_to(tmp_path)}: unreadable (ArrowInvalid" in text, text[-3000:]
+    assert "Remake them: snakemake --cores 2 --forcerun" in text

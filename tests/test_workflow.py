@@ -59,6 +59,17 @@ def _copy_repository(dest: Path) -> None:
         profiles.symlink_to("workflow/profiles")
 
 
+def _jobs(log: str) -> list[tuple[str, str]]:
+    """(rule, wildcards) of every job a Snakemake log (dry or real run) lists, sorted."""
+    jobs = []
+    for block in re.split(r"(?m)^(?=(?:local)?(?:rule|checkpoint) \w+:$)", log):
+        head = re.match(r"(?:local)?(?:rule|checkpoint) (\w+):$", block, flags=re.M)
+        if head:
+            wildcards = re.search(r"(?m)^\s+wildcards: (.*)$", block)
+            jobs.append((head.group(1), wildcards.group(1) if wildcards else ""))
+    return sorted(jobs)
+
+
 def _snakemake(cwd: Path, *args: str) -> subprocess.CompletedProcess:
     cmd = [sys.executable, "-m", "snakemake", "--cores", "2", "--configfile", "small.yaml", *args]
     result = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True)
@@ -72,7 +83,18 @@ def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
     _copy_repository(tmp_path)
     (tmp_path / "small.yaml").write_text(SMALL_STUDY)
 
+    # the copy as a git checkout: the first run must leave it clean (generated data is ignored,
+    # no tracked file is rewritten)
+    shutil.copy2(REPO / ".gitignore", tmp_path / ".gitignore")
+    git = ["git", "-c", "user.name=ttbpipe", "-c", "user.email=ttbpipe@localhost"]
+    subprocess.run([*git, "init", "-q"], cwd=tmp_path, check=True)
+    subprocess.run([*git, "add", "-A"], cwd=tmp_path, check=True)
+    subprocess.run([*git, "commit", "-qm", "checkout"], cwd=tmp_path, check=True)
+
     _snakemake(tmp_path, "--quiet", "all")
+    status = subprocess.run(["git", "status", "--porcelain"], cwd=tmp_path, check=True,
+                            capture_output=True, text=True).stdout
+    assert status == "", f"the first run changed the checkout:\n{status}"
     psd_tables = sorted((tmp_path / "results" / "psd").glob("*.parquet"))
     assert [p.stem for p in psd_tables] == ["2024-01-15", "2024-02-15", "2024-03-15"]
     provenance = read_provenance(psd_tables[0])
@@ -94,8 +116,17 @@ def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
     assert stats.get("check_inspection") == "1" and stats.get("estimate_psd") == "1", stats
     assert "synth_inspections" not in stats
 
+    # The real run runs exactly the jobs the dry run listed (no checkpoint hides any), and none
+    # of them is a batch or design of the scenarios that do not read inspection data.
+    planned = _jobs(text)
+    real = _snakemake(tmp_path, "all")
+    assert _jobs(real.stdout + real.stderr) == planned
+    batches = [w for rule, w in planned if rule in ("simulate_batch", "study_design")]
+    assert batches and all("scenario=2024-" in w or "scenario=2025-" in w for w in batches), batches
+    assert not any("scenario=single" in w or "scenario=C1" in w for w in batches)
+    assert any("scenario=2024-04-15" in w for w in batches)   # the new latest campaign's sets
+
     # Re-copying an unchanged file (new mtime, same content) does not trigger reruns.
-    _snakemake(tmp_path, "--quiet", "all")
     src = tmp_path / "resources/inspections/2024-04-15.csv"
     data = src.read_bytes()
     src.unlink()

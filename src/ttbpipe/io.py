@@ -26,7 +26,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from . import __version__
+from . import __version__, code_version
 
 PROVENANCE_KEY = b"ttbpipe"
 
@@ -51,6 +51,7 @@ def provenance(config: Mapping[str, Any] | None = None, kind: str | None = None,
     """Return the provenance document stored with every table."""
     doc: dict[str, Any] = {
         "ttbpipe_version": __version__,
+        "code_version": code_version(),
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "kind": kind,
         "config": _jsonable(dict(config)) if config is not None else None,

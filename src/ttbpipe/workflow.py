@@ -28,7 +28,7 @@ def _repository_root(start: Path) -> Path:
 
 
 def mock_snakemake(rule_name: str, configfiles: list[str] | None = None,
-                   root: str | os.PathLike[str] | None = None, **wildcards: str) -> Any:
+                   root: str | os.PathLike[str] | None = None, **wildcards: Any) -> Any:
     """Build the ``snakemake`` object of one job of ``rule_name`` without running Snakemake."""
     from snakemake.api import SnakemakeApi
     from snakemake.dag import DAG
@@ -55,6 +55,11 @@ def mock_snakemake(rule_name: str, configfiles: list[str] | None = None,
             workflow.global_resources = {}
             rule = workflow.get_rule(rule_name)
             dag = DAG(workflow, rules=[rule])
+            # a default wildcard may be a function of the parsed workflow's globals and the
+            # other wildcards (e.g. the settings digest of a batch's scenario)
+            plain = {k: v for k, v in wildcards.items() if not callable(v)}
+            wildcards = {k: (v(workflow.globals, plain) if callable(v) else v)
+                         for k, v in wildcards.items()}
             job = Job(rule, dag, dict(wildcards))
             return Snakemake(job.input, job.output, job.params, job.wildcards, 1,
                              job.resources, job.log, workflow.config, rule.name, None,
@@ -63,7 +68,7 @@ def mock_snakemake(rule_name: str, configfiles: list[str] | None = None,
         os.chdir(previous)
 
 
-def snakemake_context(script_globals: dict[str, Any], rule_name: str, **default_wildcards: str) -> Any:
+def snakemake_context(script_globals: dict[str, Any], rule_name: str, **default_wildcards: Any) -> Any:
     """Return Snakemake's injected object, or a mock of it when the script runs on its own."""
     if "snakemake" in script_globals:
         return script_globals["snakemake"]

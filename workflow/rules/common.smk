@@ -26,8 +26,9 @@ except (_ConfigurationError, ValueError) as _exc:
     raise WorkflowError(str(_exc)) from None
 
 # Package code under src/ is not tracked by Snakemake for reruns: every rule passes this through
-# `params:` so that a new ttbpipe version reruns what it made.
-MODEL_VERSION = ttbpipe.__version__
+# `params:` (the release plus a digest of the package's code) so that changed code reruns what it
+# made.
+MODEL_VERSION = ttbpipe.code_version()
 
 # Where a study writes (config `results_dir`, `logs_dir`): each paper case has its own
 # (config/case<N>.yaml: results/case<N>, logs/case<N>) so that cases and the default study can

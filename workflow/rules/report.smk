@@ -1,5 +1,7 @@
-# Stage: study aggregation, reliability and the report (issue 7; docs/studies.md, docs/reliability.md).
-# Reads every batch file of the design one at a time (memory independent of the sample count).
+# Stage: study aggregation, reliability and the report (docs/studies.md, docs/reliability.md).
+# Checks every batch file's provenance against the current settings (a stale or unreadable batch
+# stops the aggregation, naming the files and the command that remakes them), then reads them one
+# at a time (memory independent of the sample count).
 
 STUDY_OUT = results_path("study")
 
@@ -8,8 +10,9 @@ rule aggregate_study:
     """Extremes, history statistics, exceedance probabilities, Table 1, figures, report pages."""
     input:
         unpack(study_batch_files),
-        design=results_path("study/design.parquet"),
+        designs=study_design_files(),
     output:
+        design=f"{STUDY_OUT}/design.parquet",
         extremes=f"{STUDY_OUT}/extremes.parquet",
         history=f"{STUDY_OUT}/history_statistics.parquet",
         reliability=f"{STUDY_OUT}/reliability.parquet",
@@ -73,6 +76,7 @@ rule aggregate_study:
         ),
     params:
         limits=config.get("limits"),
+        settings=STUDY_SETTINGS,
         version=MODEL_VERSION,
     log:
         log_path("study/aggregate.log"),
@@ -81,5 +85,5 @@ rule aggregate_study:
 
 
 def study_targets() -> list[str]:
-    """Final outputs of the study (the design is a checkpoint; the batches follow from it)."""
+    """Final outputs of the study (every batch is known from the plan: ttbpipe.study.plan)."""
     return [f"{STUDY_OUT}/extremes.parquet", f"{STUDY_OUT}/report/summary.html"]

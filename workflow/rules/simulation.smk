@@ -1,24 +1,30 @@
-# Stage: study simulation (issue 7; docs/studies.md). Samples of the TIPM irregularity sets, their
-# forecast states and the random parameter fields, simulated in batches by the coupled model.
+# Stage: study simulation (docs/studies.md). Samples of the TIPM irregularity sets, their forecast
+# states and the random parameter fields, simulated in batches by the coupled model.
 #
-# The number of TIPM representative sets depends on the data (the campaigns' sections), so the
-# design is a checkpoint: `study_design` lists every sample (scenario, sample_index, weight, seed)
-# and the batch jobs appear once it exists. Scenario labels are known from the configuration.
-# A batch file's content depends only on its samples, never on the batch size or core count.
+# Every batch is known when the workflow starts (ttbpipe.study.plan): the number of samples of
+# each scenario follows from the configuration and, for the TIPM scenarios, from the campaigns'
+# chainage, so there is no checkpoint and `snakemake -n` lists exactly the jobs a run will run.
+# Each scenario has its own design file, with only its own inputs and parameters, so a new
+# inspection campaign leaves the fields and single-excitation designs and batches alone.
+# Batch files sit under a digest of the settings their results depend on
+# (batches/<digest>/<scenario>/...): changing a setting reruns every affected batch, even after a
+# killed run whose batch jobs finished untracked. A batch file's content depends only on its
+# samples, never on the batch size or core count.
 
-import pandas as _pd
 from snakemake.logging import logger as _smk_logger
 
+from ttbpipe.inspection.format import InspectionError as _InspectionError
 from ttbpipe.study.batch import batch_paths as _study_batch_paths
-from ttbpipe.study.design import batches as _study_batches
 from ttbpipe.study.design import resolve_scenarios as _study_resolve_scenarios
 from ttbpipe.study.design import scenario_labels as _study_scenario_labels
+from ttbpipe.study import plan as _study_plan
 from ttbpipe.study.samples import resolve_simulation as _study_resolve_simulation
+from ttbpipe.tipm.stages import population_dates as _tipm_population_dates_of
 
-STUDY_SIMULATION = _study_resolve_simulation(config.get("simulation"))
+STUDY_SIMULATION = _study_resolve_simulation(config["simulation"])
 STUDY_SCENARIOS = _study_resolve_scenarios(config["study"])
 STUDY_BATCH_ROOT = results_path("study/batches")
-_STUDY_HORIZONS = [float(h) for h in TIPM.get("forecast", {}).get("horizons_months", [6, 12])]
+_STUDY_HORIZONS = [float(h) for h in TIPM["forecast"]["horizons_months"]]
 STUDY = config["study"]
 if STUDY_SCENARIOS["forecast"]["enabled"] and len(CAMPAIGNS) < 2:
     # the spectral evolution needs two campaigns (tipm.smk makes no forecast then)
@@ -27,6 +33,30 @@ if STUDY_SCENARIOS["forecast"]["enabled"] and len(CAMPAIGNS) < 2:
                                     "forecast": {**STUDY_SCENARIOS["forecast"], "enabled": False}}}
 STUDY_LABELS = _study_scenario_labels(STUDY, TIPM_LAST, _STUDY_HORIZONS)
 STUDY_KIND = {label: kind for kind, labels in STUDY_LABELS.items() for label in labels}
+
+
+def _campaign_sections(date: str) -> int:
+    synthetic = config["inspections"].get("synthetic", {}) if date in synthetic_dates() else None
+    return _study_plan.campaign_sections(CAMPAIGNS[date], config["psd"]["section_length_m"],
+                                         synthetic)
+
+
+try:
+    if STUDY_LABELS["irregularity"] or STUDY_LABELS["forecast"]:
+        _latest_sections = _campaign_sections(TIPM_LAST)
+        _population_sections = sum(_campaign_sections(d) for d in _tipm_population_dates_of(
+            list(CAMPAIGNS), TIPM_LAST, TIPM["population_campaigns"]))
+    else:
+        _latest_sections = _population_sections = None
+    STUDY_COUNTS = _study_plan.sample_counts({**config, "study": STUDY}, STUDY_LABELS,
+                                             latest_sections=_latest_sections,
+                                             population_sections=_population_sections)
+except (_InspectionError, ValueError, OSError) as _exc:
+    raise WorkflowError(f"planning the study's batches: {_exc}") from None
+STUDY_SETTINGS = {label: _study_plan.batch_settings(config, kind, MODEL_VERSION)
+                  for label, kind in STUDY_KIND.items()}
+STUDY_DIGEST = {label: _study_plan.settings_digest(s) for label, s in STUDY_SETTINGS.items()}
+STUDY_BATCHES = _study_plan.batch_ranges(STUDY_COUNTS, STUDY_SIMULATION["batch_size"])
 # Snakemake threads of a batch job: a LocalCluster batch occupies its workers' cores.
 _STUDY_THREADS = (int(STUDY_SIMULATION["dask"]["local_workers"])
                   if STUDY_SIMULATION["executor"] == "dask"
@@ -36,44 +66,66 @@ _STUDY_THREADS = (int(STUDY_SIMULATION["dask"]["local_workers"])
 wildcard_constraints:
     first=r"\d{5}",
     last=r"\d{5}",
+    digest=r"[0-9a-f]{12}",
+
+
+def _study_kind(scenario: str) -> str:
+    if scenario not in STUDY_KIND:
+        raise WorkflowError(f"unknown study scenario {scenario!r}; the configured ones are "
+                            f"{sorted(STUDY_KIND)}")
+    return STUDY_KIND[scenario]
 
 
 def study_design_inputs(wildcards) -> dict[str, str]:
-    """TIPM tables the design needs: the latest campaign's weights, the forecast states."""
-    inputs = {}
-    if STUDY_LABELS["irregularity"]:
-        inputs["weights"] = f"{RESULTS}/tipm/selection/{TIPM_LAST}.weights.parquet"
-    if STUDY_LABELS["forecast"]:
-        inputs["states"] = results_path("tipm/forecast_states.parquet")
-    if STUDY_LABELS["irregularity_mc"]:   # case 3: the pooled PSD population of the latest campaign
-        inputs["population"] = tipm_population_psds(type("W", (), {"date": TIPM_LAST}))
-    return inputs
+    """TIPM tables one scenario's design needs (none for the fields and single scenarios)."""
+    kind = _study_kind(wildcards.scenario)
+    if kind == "irregularity":
+        return {"weights": f"{RESULTS}/tipm/selection/{TIPM_LAST}.weights.parquet"}
+    if kind == "forecast":
+        return {"states": results_path("tipm/forecast_states.parquet")}
+    if kind == "irregularity_mc":   # case 3: the pooled PSD population of the latest campaign
+        return {"population": tipm_population_psds(type("W", (), {"date": TIPM_LAST}))}
+    return {}
 
 
-checkpoint study_design:
-    """Every sample of the study: scenario, index, probability weight, profile, seed entropy."""
+def study_design_params(wildcards) -> dict:
+    """What one scenario's design depends on, and nothing else (so that a new campaign does not
+    rewrite the designs of the scenarios that do not read inspection data)."""
+    kind = _study_kind(wildcards.scenario)
+    out = {"kind": kind, "seed": STUDY["seed"], "expected_samples": STUDY_COUNTS[wildcards.scenario],
+           "scenario": {kind: STUDY_SCENARIOS[kind]} if kind in STUDY_SCENARIOS else {}}
+    if kind in ("irregularity", "forecast", "irregularity_mc"):
+        out["latest_campaign"] = TIPM_LAST
+    if kind == "forecast":
+        out["horizons_months"] = _STUDY_HORIZONS
+    return out
+
+
+rule study_design:
+    """The samples of one scenario: index, probability weight, profile, seed entropy."""
     input:
         unpack(study_design_inputs),
     output:
-        results_path("study/design.parquet"),
+        results_path("study/design/{scenario}.parquet"),
     params:
-        study=STUDY,
-        latest_campaign=TIPM_LAST,
-        horizons_months=_STUDY_HORIZONS,
+        design=study_design_params,
         version=MODEL_VERSION,
     log:
-        log_path("study/design.log"),
+        log_path("study/design/{scenario}.log"),
     script:
         "../scripts/study_design.py"
 
 
 def study_batch_inputs(wildcards) -> dict[str, str]:
-    """The design and the irregularity profiles the batch's scenario reads."""
-    kind = STUDY_KIND.get(wildcards.scenario)
-    if kind is None:
-        raise WorkflowError(f"unknown study scenario {wildcards.scenario!r}; the configured ones "
-                            f"are {sorted(STUDY_KIND)}")
-    inputs = {"design": results_path("study/design.parquet")}
+    """The scenario's design and the irregularity profiles the batch reads."""
+    kind = _study_kind(wildcards.scenario)
+    if wildcards.digest != STUDY_DIGEST[wildcards.scenario]:
+        raise WorkflowError(
+            f"batch {wildcards.scenario} {wildcards.first}-{wildcards.last}: settings digest "
+            f"{wildcards.digest} is not the current one ({STUDY_DIGEST[wildcards.scenario]}): "
+            "that folder holds results of other settings or code; ask for the current targets "
+            "(snakemake --cores N) instead of an old batch file")
+    inputs = {"design": results_path(f"study/design/{wildcards.scenario}.parquet")}
     if kind == "irregularity":
         inputs["profiles"] = f"{RESULTS}/tipm/profiles/{TIPM_LAST}.parquet"
     elif kind == "forecast":
@@ -88,28 +140,26 @@ rule simulate_batch:
     input:
         unpack(study_batch_inputs),
     output:
-        extremes=f"{STUDY_BATCH_ROOT}/{{scenario}}/extremes_{{first}}-{{last}}.parquet",
-        histories=f"{STUDY_BATCH_ROOT}/{{scenario}}/histories_{{first}}-{{last}}.parquet",
+        extremes=f"{STUDY_BATCH_ROOT}/{{digest}}/{{scenario}}/extremes_{{first}}-{{last}}.parquet",
+        histories=f"{STUDY_BATCH_ROOT}/{{digest}}/{{scenario}}/histories_{{first}}-{{last}}.parquet",
     params:
-        # what a sample's result depends on (not batch_size / executor: results are identical)
-        simulation={k: v for k, v in STUDY_SIMULATION.items()
-                    if k not in ("batch_size", "executor", "dask")},
-        structure=config.get("structure", {}),
-        fields=config.get("fields"),
-        seed=config["study"]["seed"],
-        mc_profiles={"wavelength_band_m": config["psd"].get("wavelength_band_m"),
-                     **TIPM.get("profiles", {})},
+        # what a sample's result depends on (its digest is in the path; not batch_size or the
+        # executor: results are identical)
+        settings=lambda wildcards: STUDY_SETTINGS[wildcards.scenario],
         version=MODEL_VERSION,
     threads: _STUDY_THREADS
     log:
-        log_path("study/batches/{scenario}/{first}-{last}.log"),
+        log_path("study/batches/{digest}/{scenario}/{first}-{last}.log"),
     script:
         "../scripts/simulate_batch.py"
 
 
 def study_batch_files(wildcards=None) -> dict[str, list[str]]:
-    """Every batch file of the design (evaluated after the study_design checkpoint)."""
-    design = _pd.read_parquet(checkpoints.study_design.get().output[0])
-    pairs = [_study_batch_paths(STUDY_BATCH_ROOT, *b)
-             for b in _study_batches(design, STUDY_SIMULATION["batch_size"])]
+    """Every batch file of the study (known from the plan: no checkpoint)."""
+    pairs = [_study_batch_paths(f"{STUDY_BATCH_ROOT}/{STUDY_DIGEST[s]}", s, first, last)
+             for s, first, last in STUDY_BATCHES]
     return {"extremes": [p[0] for p in pairs], "histories": [p[1] for p in pairs]}
+
+
+def study_design_files(wildcards=None) -> list[str]:
+    return [results_path(f"study/design/{label}.parquet") for label in STUDY_COUNTS]

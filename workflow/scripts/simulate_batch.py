@@ -6,12 +6,17 @@ from ttbpipe.io import read_table
 from ttbpipe.logs import setup_logging
 from ttbpipe.study.batch import simulate_batch
 from ttbpipe.study.design import batch_rows
+from ttbpipe.study.plan import settings_digest
 from ttbpipe.workflow import snakemake_context
 
 
 def main(snakemake) -> None:
     setup_logging(snakemake.log[0])
     w = snakemake.wildcards
+    settings = dict(snakemake.params.settings)
+    if settings_digest(settings) != w.digest:
+        raise ValueError(f"batch {w.scenario} {w.first}-{w.last}: the settings passed have digest "
+                         f"{settings_digest(settings)}, the output path {w.digest}")
     rows = batch_rows(read_table(snakemake.input.design), w.scenario, int(w.first), int(w.last))
     config = dict(snakemake.config)
     simulation = dict(config.get("simulation") or {})
@@ -26,17 +31,19 @@ def main(snakemake) -> None:
         profiles = {str(rows["kind"].iloc[0]): snakemake.input.profiles}
     if "population" in snakemake.input.keys():   # irregularity_mc (paper case 3's MCM)
         paths = [str(p) for p in snakemake.input.population]
-        settings = dict(getattr(snakemake.params, "mc_profiles", None) or {})
+        mc = dict(settings.get("mc_profiles") or {})
         profiles = {"irregularity_mc": {
-            "psd_paths": paths, "wavelength_band_m": settings.get("wavelength_band_m"),
-            "length_m": settings.get("length_m", 1000.0), "dx_m": settings.get("dx_m", 0.25),
+            "psd_paths": paths, "wavelength_band_m": mc.get("wavelength_band_m"),
+            "length_m": mc["length_m"], "dx_m": mc["dx_m"],
             "date": max(Path(p).stem for p in paths)}}
     simulate_batch(rows, config, profiles, snakemake.output.extremes, snakemake.output.histories,
-                   scenario=w.scenario, first=int(w.first), last=int(w.last))
+                   scenario=w.scenario, first=int(w.first), last=int(w.last),
+                   settings=settings, settings_digest=w.digest)
 
 
 # Dask's LocalCluster starts its workers with multiprocessing "spawn", which re-imports this
 # script as __mp_main__ in every worker: the batch must run only in the main process.
 if __name__ == "__main__":
     main(snakemake_context(globals(), "simulate_batch", scenario="C1", first="00000",
-                           last="00003"))
+                           last="00003",
+                           digest=lambda workflow, w: workflow["STUDY_DIGEST"][w["scenario"]]))

@@ -274,6 +274,18 @@ class _Grid:
     step: float
 
 
+def grid_indices(chainage: np.ndarray) -> tuple[np.ndarray, float]:
+    """(grid index of every sample, median step): sample i sits ``k[i]`` median steps after the
+    first, each step rounded to a whole number of median steps. The cleaned campaign has
+    ``k[-1] + 1`` rows (dropouts re-inserted), so this also tells, from the chainage alone, how
+    many rows and full sections a campaign will have (ttbpipe.study.plan, before any job runs)."""
+    chainage = np.asarray(chainage, dtype=float)
+    steps = np.diff(chainage)
+    median_step = float(np.median(steps))
+    k = np.concatenate(([0], np.cumsum(np.rint(steps / median_step)))).astype(np.int64)
+    return k, median_step
+
+
 def _regrid(chainage: np.ndarray, data: np.ndarray, source: str, report: CleaningReport,
             max_gap_m: float, sampling_tolerance: float, max_jitter: float) -> _Grid:
     """Put the samples on a uniform grid; re-grid jitter, re-insert dropouts; errors for jumps.
@@ -287,8 +299,8 @@ def _regrid(chainage: np.ndarray, data: np.ndarray, source: str, report: Cleanin
     Samples further than ``max_jitter`` steps from the fitted grid (a drift) are errors too.
     """
     steps = np.diff(chainage)
-    median_step = float(np.median(steps))
-    multiples = np.rint(steps / median_step)
+    k, median_step = grid_indices(chainage)
+    multiples = np.diff(k).astype(float)
     step_error = np.abs(steps - multiples * median_step)
     jumps = np.flatnonzero((step_error > max_jitter * median_step) | (multiples < 1))
     if jumps.size:
@@ -298,7 +310,6 @@ def _regrid(chainage: np.ndarray, data: np.ndarray, source: str, report: Cleanin
             f"irregular sampling: a jump in chainage, the step from {chainage[i - 1]:.6g} m "
             f"(row {i}) to {chainage[i]:.6g} m is {steps[i - 1]:.6g} m, not a multiple of the "
             f"{median_step:.6g} m median step (tolerance max_jitter = {max_jitter:g} step)")
-    k = np.concatenate(([0], np.cumsum(multiples))).astype(np.int64)
     fitted = float(np.polyfit(k, chainage, 1)[0])
     half_tolerance = 0.5 * sampling_tolerance * median_step
     step = round(fitted, 4) if abs(round(fitted, 4) - fitted) * k[-1] <= 2 * half_tolerance \

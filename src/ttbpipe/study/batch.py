@@ -214,3 +214,75 @@ def simulate_design(design: pd.DataFrame, config: Mapping[str, Any], profiles: M
                        *batch_paths(root, scenario, first, last), executor=executor,
                        runner=runner)
     return todo
+
+
+class StaleBatchError(ValueError):
+    """Batch files that were not made by the current settings and code, or cannot be read."""
+
+
+def _differences(old: Any, new: Any, path: str = "") -> list[str]:
+    """Key paths where two settings documents differ (for the error message)."""
+    if isinstance(old, Mapping) and isinstance(new, Mapping):
+        out: list[str] = []
+        for key in sorted(set(old) | set(new), key=str):
+            out += _differences(old.get(key), new.get(key), f"{path}.{key}" if path else str(key))
+        return out
+    return [] if old == new else [f"{path}: {old!r} -> {new!r}"]
+
+
+def verify_batches(paths: Sequence[str | os.PathLike[str]], design: pd.DataFrame,
+                   settings: Mapping[str, Mapping[str, Any]], *,
+                   rerun_hint: str = "snakemake --cores 2 --forcerun") -> None:
+    """Check, before aggregating, that every batch file was made for the current study.
+
+    For each file: it can be read (a truncated or corrupt Parquet file fails here, not deep in
+    pyarrow); its provenance names a scenario whose current settings (``settings[scenario]``,
+    :func:`ttbpipe.study.plan.batch_settings`) have the digest the file was made with; and it
+    holds exactly the design's samples of its index range. Raises :class:`StaleBatchError`
+    naming every bad file, what is wrong with it and the command that remakes them.
+    """
+    import json
+
+    import pyarrow.parquet as pq
+
+    from ..io import PROVENANCE_KEY
+    from .plan import settings_digest
+
+    problems: list[tuple[str, str]] = []
+    design_index = {s: set(int(i) for i in g["sample_index"])
+                    for s, g in design.groupby(design["scenario"].astype(str))}
+    for path in map(str, paths):
+        try:
+            meta = pq.ParquetFile(path).metadata
+            doc = json.loads((meta.metadata or {})[PROVENANCE_KEY])
+        except KeyError:
+            problems.append((path, "no ttbpipe provenance in its metadata: not written by a batch job"))
+            continue
+        except Exception as exc:   # truncated or corrupt file (pyarrow raises ArrowInvalid, OSError)
+            problems.append((path, f"unreadable ({type(exc).__name__}: {exc}): truncated or "
+                                   "corrupt, e.g. by a job killed while copying or a full disk"))
+            continue
+        scenario = str(doc.get("scenario"))
+        current = settings.get(scenario)
+        if current is None:
+            problems.append((path, f"scenario {scenario!r} is not part of the current study"))
+            continue
+        made_with = doc.get("settings_digest")
+        if made_with != settings_digest(current):
+            changed = _differences(doc.get("settings") or {}, dict(current))
+            problems.append((path, f"made with settings digest {made_with}, the current one is "
+                                   f"{settings_digest(current)}"
+                                   + (f" ({'; '.join(changed[:5])})" if changed else "")))
+            continue
+        first, last = int(doc.get("first", -1)), int(doc.get("last", -1))
+        expected = sorted(i for i in design_index.get(scenario, set()) if first <= i <= last)
+        if sorted(int(i) for i in doc.get("samples", [])) != expected:
+            problems.append((path, f"holds samples {doc.get('samples')} but the design of "
+                                   f"{scenario} has {expected} in {first}-{last}"))
+    if problems:
+        lines = "\n".join(f"  {p}: {why}" for p, why in problems)
+        files = " ".join(sorted({p for p, _ in problems}))
+        raise StaleBatchError(
+            f"{len(problems)} batch file(s) were not made by the current settings and code or "
+            f"cannot be read, so they must not be aggregated:\n{lines}\n"
+            f"Remake them: {rerun_hint} {files}")

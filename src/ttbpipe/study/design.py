@@ -169,78 +169,109 @@ def _rows(scenario: str, kind: str, indices, weights, profile_indices, condition
                          for i in indices]})
 
 
+def scenario_kind(labels: Mapping[str, list[str]], label: str) -> str:
+    """The kind of scenario ``label`` (``labels``: :func:`scenario_labels`)."""
+    for kind, names in labels.items():
+        if label in names:
+            return kind
+    raise ValueError(f"unknown study scenario {label!r}; the configured ones are "
+                     f"{sorted(n for names in labels.values() for n in names)}")
+
+
+def scenario_design(study: Mapping[str, Any], label: str, *, latest_campaign: str,
+                    tipm_weights: pd.DataFrame | None = None,
+                    forecast_states: pd.DataFrame | None = None,
+                    horizons_months: Iterable[float] = (),
+                    n_population_sections: int | None = None, kind: str | None = None,
+                    expected_samples: int | None = None) -> pd.DataFrame:
+    """The samples of one scenario (:data:`DESIGN_COLUMNS`), sorted by index.
+
+    ``tipm_weights``: the latest campaign's ``results/tipm/selection/<date>.weights.parquet``
+    (``sample_index``, ``weight``; scenario ``irregularity``); ``forecast_states``:
+    ``results/tipm/forecast_states.parquet`` (``profile_index``, ``target_date``, ``level``,
+    ``sample_index``, ``weight``; scenarios ``forecast``); ``n_population_sections``: sections
+    of the latest campaign's pooled PSD population (scenario ``irregularity_mc``:
+    ``profile_index`` = the drawn section). Each scenario's design depends only on its own
+    inputs, so the workflow writes one file per scenario and a new inspection campaign leaves
+    the designs (and batches) of the fields and single-excitation scenarios untouched.
+    ``kind``: the scenario's kind when known (else found from the labels of ``study``);
+    ``expected_samples``: the count the workflow planned its batches for
+    (ttbpipe.study.plan.sample_counts), checked here.
+    """
+    sc = resolve_scenarios(study)
+    seed = int(study["seed"])
+    if kind is None:
+        kind = scenario_kind(scenario_labels(study, latest_campaign, horizons_months), label)
+    if kind == "irregularity":
+        if tipm_weights is None:
+            raise ValueError("scenario irregularity needs the TIPM weights table of campaign "
+                             f"{latest_campaign}")
+        w = tipm_weights.sort_values("sample_index")
+        block = _rows(label, "irregularity", w["sample_index"], w["weight"], w["sample_index"],
+                      "nominal", seed)
+    elif kind == SINGLE:
+        block = _rows(SINGLE, SINGLE, [0], [1.0], [-1], "nominal", seed)
+    elif kind == "forecast":
+        if forecast_states is None:
+            raise ValueError("scenario forecast needs results/tipm/forecast_states.parquet")
+        target, level = parse_forecast_label(label)
+        level = float(sc["forecast"]["level"]) if level is None else level
+        states = forecast_states[np.isclose(forecast_states["level"].to_numpy(float), level)]
+        states = states[states["target_date"].astype(str) == target].sort_values("sample_index")
+        if states.empty:
+            raise ValueError(f"forecast_states has no state for target date {target} at level "
+                             f"{level}; study.scenarios.forecast.level must be one of "
+                             f"tipm.forecast.levels {sorted(forecast_states['level'].unique())}")
+        block = _rows(label, "forecast", states["sample_index"], states["weight"],
+                      states["profile_index"], "nominal", seed)
+    elif kind in ("fields", "fields_mc"):
+        n = int(sc[kind]["samples"])
+        condition = label if kind == "fields" else label[:-len("_mc")]
+        block = _rows(label, kind, np.arange(n), np.ones(n), np.full(n, -1), condition, seed)
+    else:   # irregularity_mc
+        if n_population_sections is None:
+            raise ValueError("scenario irregularity_mc needs the number of sections of the "
+                             f"population of campaign {latest_campaign}")
+        n = int(sc["irregularity_mc"]["samples"])
+        sections = [mc_section(seed, i, n_population_sections) for i in range(n)]
+        block = _rows(MC_IRREGULARITY, "irregularity_mc", np.arange(n), np.ones(n), sections,
+                      "nominal", seed)
+    if (block["weight"] <= 0).any() or not np.isfinite(block["weight"]).all():
+        bad = block[(block["weight"] <= 0) | ~np.isfinite(block["weight"])].iloc[0]
+        raise ValueError(f"sample {bad['scenario']}/{bad['sample_index']}: weight {bad['weight']} "
+                         "is not a positive finite number")
+    if block.duplicated(["scenario", "sample_index"]).any():
+        dup = block[block.duplicated(["scenario", "sample_index"])].iloc[0]
+        raise ValueError(f"sample ({dup['scenario']}, {dup['sample_index']}) appears twice")
+    if expected_samples is not None and (
+            len(block) != int(expected_samples)
+            or not np.array_equal(np.sort(block["sample_index"].to_numpy()), np.arange(len(block)))):
+        raise ValueError(
+            f"scenario {label}: the design has {len(block)} samples (indices "
+            f"{block['sample_index'].min()}..{block['sample_index'].max()}) but the workflow "
+            f"planned {expected_samples} (0..{int(expected_samples) - 1}) from the campaigns' "
+            "chainage when it started (ttbpipe.study.plan): a campaign file changed during the "
+            "run, or its cleaning changed its number of sections; rerun snakemake")
+    return block.reset_index(drop=True)
+
+
 def build_design(study: Mapping[str, Any], *, latest_campaign: str,
                  tipm_weights: pd.DataFrame | None = None,
                  forecast_states: pd.DataFrame | None = None,
                  horizons_months: Iterable[float] = (),
                  n_population_sections: int | None = None) -> pd.DataFrame:
-    """Every sample of the study (:data:`DESIGN_COLUMNS`), sorted by scenario and index.
-
-    ``tipm_weights``: the latest campaign's ``results/tipm/selection/<date>.weights.parquet``
-    (``sample_index``, ``weight``); ``forecast_states``: ``results/tipm/forecast_states.parquet``
-    (``profile_index``, ``target_date``, ``level``, ``sample_index``, ``weight``);
-    ``n_population_sections``: sections of the latest campaign's pooled PSD population (scenario
-    ``irregularity_mc``: ``profile_index`` = the drawn section).
-    """
-    sc = resolve_scenarios(study)
-    seed = int(study["seed"])
+    """Every sample of the study (:data:`DESIGN_COLUMNS`), sorted by scenario and index: the
+    :func:`scenario_design` of every configured scenario."""
     labels = scenario_labels(study, latest_campaign, horizons_months)
-    blocks = []
-    if labels["irregularity"]:
-        if tipm_weights is None:
-            raise ValueError("scenario irregularity needs the TIPM weights table of campaign "
-                             f"{latest_campaign}")
-        w = tipm_weights.sort_values("sample_index")
-        blocks.append(_rows(latest_campaign, "irregularity", w["sample_index"], w["weight"],
-                            w["sample_index"], "nominal", seed))
-    if labels[SINGLE]:
-        blocks.append(_rows(SINGLE, SINGLE, [0], [1.0], [-1], "nominal", seed))
-    if labels["forecast"]:
-        if forecast_states is None:
-            raise ValueError("scenario forecast needs results/tipm/forecast_states.parquet")
-        for label in labels["forecast"]:
-            target, level = parse_forecast_label(label)
-            level = float(sc["forecast"]["level"]) if level is None else level
-            states = forecast_states[np.isclose(forecast_states["level"].to_numpy(float), level)]
-            block = states[states["target_date"].astype(str) == target].sort_values("sample_index")
-            if block.empty:
-                raise ValueError(f"forecast_states has no state for target date {target} at level "
-                                 f"{level}; study.scenarios.forecast.level must be one of "
-                                 f"tipm.forecast.levels {sorted(forecast_states['level'].unique())}")
-            blocks.append(_rows(label, "forecast", block["sample_index"], block["weight"],
-                                block["profile_index"], "nominal", seed))
-    n_fields = int(sc["fields"]["samples"])
-    for condition in labels["fields"]:
-        if n_fields < 1:
-            raise ValueError(f"study.scenarios.fields.samples must be >= 1, got {n_fields}")
-        blocks.append(_rows(condition, "fields", np.arange(n_fields), np.ones(n_fields),
-                            np.full(n_fields, -1), condition, seed))
-    n_mc = int(sc["fields_mc"]["samples"])
-    for label in labels["fields_mc"]:
-        if n_mc < 1:
-            raise ValueError(f"study.scenarios.fields_mc.samples must be >= 1, got {n_mc}")
-        blocks.append(_rows(label, "fields_mc", np.arange(n_mc), np.ones(n_mc),
-                            np.full(n_mc, -1), label[:-len("_mc")], seed))
-    if labels["irregularity_mc"]:
-        if n_population_sections is None:
-            raise ValueError("scenario irregularity_mc needs the number of sections of the "
-                             f"population of campaign {latest_campaign}")
-        n = int(sc["irregularity_mc"]["samples"])
-        if n < 1:
-            raise ValueError(f"study.scenarios.irregularity_mc.samples must be >= 1, got {n}")
-        sections = [mc_section(seed, i, n_population_sections) for i in range(n)]
-        blocks.append(_rows(MC_IRREGULARITY, "irregularity_mc", np.arange(n), np.ones(n),
-                            sections, "nominal", seed))
-    if not blocks:
+    order = [label for kind in (*SCENARIO_KINDS[:1], SINGLE, *SCENARIO_KINDS[1:])
+             for label in labels.get(kind, [])]
+    if not order:
         raise ValueError("study.scenarios: every scenario is disabled; enable at least one")
-    design = pd.concat(blocks, ignore_index=True)
-    if (design["weight"] <= 0).any() or not np.isfinite(design["weight"]).all():
-        bad = design[(design["weight"] <= 0) | ~np.isfinite(design["weight"])].iloc[0]
-        raise ValueError(f"sample {bad['scenario']}/{bad['sample_index']}: weight {bad['weight']} "
-                         "is not a positive finite number")
-    if design.duplicated(["scenario", "sample_index"]).any():
-        dup = design[design.duplicated(["scenario", "sample_index"])].iloc[0]
-        raise ValueError(f"sample ({dup['scenario']}, {dup['sample_index']}) appears twice")
+    design = pd.concat([scenario_design(study, label, latest_campaign=latest_campaign,
+                                        tipm_weights=tipm_weights, forecast_states=forecast_states,
+                                        horizons_months=horizons_months,
+                                        n_population_sections=n_population_sections)
+                        for label in order], ignore_index=True)
     log.info("study design: %s", ", ".join(f"{s}: {n} samples" for s, n in
                                           design.groupby("scenario", sort=False).size().items()))
     return design

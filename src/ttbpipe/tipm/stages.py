@@ -71,7 +71,8 @@ def load_population(paths: Sequence[str | Path], wavelength_band_m) -> list[PSDP
     return pops
 
 
-def _selector(cfg: Mapping[str, Any]) -> TIPMSelector:
+def selector_from_config(cfg: Mapping[str, Any]) -> TIPMSelector:
+    """The TIPM selector of a resolved ``tipm:`` section."""
     s = cfg["selection"]
     return TIPMSelector(fraction=s["fraction"], min_samples=s["min_samples"],
                         max_samples=s.get("max_samples"), method=s["method"],
@@ -83,7 +84,7 @@ def select_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any], psd: 
     """(representative PSD long table with weights, weights table, fidelity metrics)."""
     cfg = resolve_config(tipm)
     population = PSDPopulation.concat(load_population(psd_paths, psd.get("wavelength_band_m")))
-    selection = _selector(cfg).select(population)
+    selection = selector_from_config(cfg).select(population)
     metrics = selection_metrics(population, selection)
     for row in metrics.itertuples():
         log.info("%s: %d of %d sections; max rel. error mean %.2e, std %.2e; RMS KS p = %.3f",
