@@ -113,3 +113,28 @@ def test_leading_subset_path_matches_full_solution(monkeypatch):
 def test_bad_grid_raises():
     with pytest.raises(ValueError, match="strictly increasing"):
         KarhunenLoeve(np.array([0.0, 1.0, 1.0, 2.0]), 1.0)
+
+
+def test_kle_basis_does_not_depend_on_the_lapack_build():
+    """The same KLE basis (hence the same field for the same coefficients), to 1e-9, under
+    OpenBLAS's AVX-512, AVX2 and SSE3 kernels and with one or two BLAS threads: eigenvector signs
+    are fixed by ttbpipe.fields.kle.fix_eigenvector_signs. Without it the signs followed the
+    build and a study's pad factors changed by 2 % between thread settings."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    code = ("import json, numpy as np; from ttbpipe.fields.kle import KarhunenLoeve; "
+            "k = KarhunenLoeve(np.arange(0.0, 150.0, 0.63), 10.0, variance_fraction=0.95); "
+            "print(json.dumps(k.modes_matrix.tolist()))")
+    bases = []
+    for core, threads in (("Haswell", "1"), ("SkylakeX", "2"), ("Prescott", "1"), ("SkylakeX", "1")):
+        env = {**os.environ, "OPENBLAS_CORETYPE": core, "OPENBLAS_NUM_THREADS": threads,
+               "OMP_NUM_THREADS": threads}
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                             text=True, check=True).stdout
+        bases.append(np.array(json.loads(out)))
+    assert bases[0].shape[1] > 10
+    for other in bases[1:]:
+        np.testing.assert_allclose(other, bases[0], rtol=0, atol=1e-9)

@@ -50,8 +50,9 @@ def full_rank_factor(positions_m: np.ndarray, correlation_length_m: float,
     """Matrix A with A A^T = the spatial correlation matrix (plain Monte Carlo, eq. 36).
 
     Cholesky when the matrix is numerically positive definite; otherwise (squared-exponential
-    kernel on a fine grid is numerically singular) the symmetric square root with eigenvalues
-    clipped at zero, logged.
+    kernel on a fine grid is numerically singular) the symmetric square root V sqrt(L) V^T with
+    eigenvalues clipped at zero, logged: unique, so independent of the eigenvectors' signs
+    (which the LAPACK build chooses).
     """
     corr = correlation_matrix(positions_m, correlation_length_m, kernel)
     try:
@@ -62,7 +63,7 @@ def full_rank_factor(positions_m: np.ndarray, correlation_length_m: float,
         log.info("spatial correlation matrix (%d points, %s, b = %g m) is numerically singular; "
                  "using its eigen-factor (%d negative round-off eigenvalues clipped to 0)",
                  corr.shape[0], kernel, correlation_length_m, clipped)
-        return vectors * np.sqrt(np.maximum(values, 0.0))
+        return (vectors * np.sqrt(np.maximum(values, 0.0))) @ vectors.T
 
 
 @dataclass
