@@ -31,6 +31,7 @@ import pandas as pd
 from scipy import linalg
 
 from ..configuration import validate_section
+from ..threads import pinned
 from .covariance import correlation_matrix
 from .groups import ParameterGroup, build_groups, carrier_positions, line_length_m, segment_index
 from .kle import KarhunenLoeve
@@ -175,6 +176,7 @@ class FieldSampler:
         overrides ``fields_config["method"]``.
     """
 
+    @pinned   # the KL bases' eigen-decompositions: one BLAS thread (ttbpipe.threads)
     def __init__(self, fields_config: Mapping[str, Any], study_seed: int, *,
                  positions: Mapping[str, np.ndarray] | None = None,
                  method: str | None = None) -> None:
@@ -207,6 +209,7 @@ class FieldSampler:
     def parameters(self) -> list[str]:
         return [p for g in self.groups for p in g.parameters]
 
+    @pinned
     def sample(self, sample_index: int) -> dict[str, np.ndarray]:
         """Factors of sample ``sample_index``: {parameter: (n_carriers,) array}."""
         if sample_index < 0:
