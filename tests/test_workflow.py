@@ -119,7 +119,7 @@ def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
     # The real run runs exactly the jobs the dry run listed (no checkpoint hides any), and none
     # of them is a batch or design of the scenarios that do not read inspection data.
     planned = _jobs(text)
-    real = _snakemake(tmp_path, "all")
+    real = _snakemake(tmp_path)
     assert _jobs(real.stdout + real.stderr) == planned
     batches = [w for rule, w in planned if rule in ("simulate_batch", "study_design")]
     assert batches and all("scenario=2024-" in w or "scenario=2025-" in w for w in batches), batches
