@@ -113,7 +113,7 @@ class SimulationStopped(RuntimeError):
                                    setup.irregularity_config, setup.speed,
                                    propose_auto=setup.propose_auto)
         finite = q[np.isfinite(q)]
-        big = f"; largest vehicle displacement {np.abs(finite).max():.3g} m" if finite.size else ""
+        big = f"; largest vehicle displacement {np.abs(finite).max():.3f} m" if finite.size else ""
         super().__init__(f"coupled simulation stopped at t = {self.t_s:.4f} s (leading wheelset at "
                          f"x = {self.x_lead_m:.1f} m): {STATUS_MESSAGES[status]}{big}; {text}")
 
