@@ -4,6 +4,14 @@ Cases with a ``train:`` section go to :func:`ttbpipe.simulation.coupled.run_coup
 owner); cases with ``loads:`` run moving loads on the structure (:mod:`ttbpipe.simulation.run`).
 The table (time_s + monitor columns with units) is written atomically with the resolved case in
 its provenance (kind "simulation").
+
+Exit status 1, nothing written, with the message on stderr: an invalid case, a refused time step
+(the message proposes a step that passes every stability limit, or ``time_step_s: auto``, which
+one case may use), a run that stopped (non-finite state, every wheel off the rail, divergence:
+the message names the likely cause, e.g. the irregularity, and its remedy) or a non-finite value
+in the results. A run in which wheels lose contact but which completes is a result (exit 0):
+its loss-of-contact index is in the summary (``contact_loss_*``), Q/P is 0 where a wheel is off
+the rail (``<wheel>_in_contact`` = 0).
 """
 
 from __future__ import annotations
@@ -32,7 +40,11 @@ def run(args: argparse.Namespace) -> int:
             except ModuleNotFoundError as exc:
                 raise ValueError(f"{args.config}: train cases need ttbpipe.simulation.coupled, "
                                  f"which is not available ({exc})") from exc
-            table, summary = run_coupled(case)
+            from .coupled import SimulationStopped
+            try:
+                table, summary = run_coupled(case, propose_auto=True)
+            except SimulationStopped as exc:
+                raise ValueError(str(exc)) from exc
         else:
             from .run import run_moving_loads
             table, summary = run_moving_loads(case)

@@ -15,8 +15,11 @@ Case configuration (all sections optional; SI units unless the key says otherwis
     simulation:
       track: structure | rigid          # default: structure
       speed_kmh: 300                    # or train.speed_kmh
-      time_step_s: 1.0e-4               # or auto: min(contact, structure, coupled limits)
-      check_time_step: true             # the structure's own check (the contact check always runs)
+      time_step_s: 1.0e-4               # or auto (one case, not a study): the smallest of
+                                        #  every stability limit (structure, coupled, contact,
+                                        #  vehicle; resolve_time_step)
+      check_time_step: true             # the structure's and coupled checks (the contact and
+                                        #  vehicle checks always run)
       lateral_creep: semi_implicit      # or explicit: the lateral creep damper f22/V on the rail
                                         #  head, semi-implicit (no step limit; docs/performance.md)
       output_interval_s: 1.0e-3         # or output_every: n steps
@@ -39,6 +42,14 @@ Case configuration (all sections optional; SI units unless the key says otherwis
       channels: [vertical, alignment, cross_level, gauge]   # others set to zero
     monitors: [...]                     # structure monitors (default: the structure's default)
 
+Time step: every stability limit is computed first (:func:`resolve_time_step`, :func:`step_limits`)
+and a refused step's message proposes one that passes all of them. The loop's stops
+(:data:`STATUS_MESSAGES`) raise :class:`SimulationStopped`, whose message names the likely cause
+(the step, or the irregularity, or a loss of contact; :mod:`ttbpipe.simulation.diagnosis`).
+Loss of wheel-rail contact is counted at every step and reported as its own index (summary
+``contact_loss_*``); Q/P is defined in contact only. Nothing non-finite leaves
+:func:`run_coupled` (:func:`check_finite`).
+
 Irregularities: the four spectral channels become per-rail inputs with
 :func:`ttbpipe.channels.rails_from_spectral`; each wheel reads its rail's profile at its own x.
 The track is perfect behind the leading wheelset's start position and the irregularity fades in
@@ -50,7 +61,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
@@ -63,22 +74,49 @@ from ..structure.kernels import (StructurePacked, _add_rail_point_force,
                                  _add_rail_point_force_at, _rail_point_kinematics_at,
                                  _structure_accelerations, _zhai_predict)
 from ..vehicle.comfort import sperling_index
-from ..vehicle.contact import N_COLS, ContactGeometry, build_geometry
+from ..vehicle.contact import (N_COLS, ContactGeometry, build_geometry, creep_coefficients,
+                               hertz_stiffness)
 from ..vehicle.kernels import N_WHEEL_OUT, _csr_matvec_sub, _train_contact_relaxed
 from ..vehicle.model import (DOF_PER_CAR, PITCH, ROLL, YAW, Y, Z, TrainModel, build_train_model)
 from ..vehicle.parameters import TrainParameters, train_from_config
+from ..vehicle.stability import VEHICLE_SAFETY, vehicle_step_is_stable, vehicle_time_step_limit
 from ..vehicle.static import StructureStatic, solve_vehicle_static
 
 log = logging.getLogger(__name__)
 
+#: What each stop of the loop means; the cause and remedy come from ttbpipe.simulation.diagnosis
+#: (the step is not always at fault).
 STATUS_MESSAGES = {
-    1: "non-finite state (numerical blow-up): reduce simulation.time_step_s (Zhai stability) or "
-       "check the irregularity amplitudes and contact parameters",
-    2: "every wheel lost contact with the rail at the same step: reduce simulation.time_step_s or "
-       "check the irregularity scale (mm vs m) and the wheel loads",
-    3: "vehicle displacement above 0.5 m (divergence): reduce simulation.time_step_s or check the "
-       "suspension parameters",
+    1: "non-finite state (numerical blow-up)",
+    2: "every wheel lost contact with the rail at the same step",
+    3: "vehicle displacement above 0.5 m (divergence)",
 }
+
+
+class SimulationStopped(RuntimeError):
+    """The loop stopped (status 1-3 of :data:`STATUS_MESSAGES`); the message names the likely
+    cause (time step, irregularity, loss of contact) with its remedy
+    (:func:`ttbpipe.simulation.diagnosis.explain`). Attributes: status, step, t_s, x_lead_m,
+    cause, contact_loss (the loss-of-contact index up to the stop)."""
+
+    def __init__(self, setup: "CoupledSetup", status: int, step: int, contact_loss: np.ndarray,
+                 q: np.ndarray):
+        from .diagnosis import contact_loss_stats, explain
+
+        self.status, self.step = int(status), int(step)
+        self.t_s = (step + 1) * setup.dt
+        self.x_lead_m = setup.x_lead0 + setup.speed * self.t_s
+        m = setup.model
+        self.contact_loss = contact_loss_stats(contact_loss, setup.dt, setup.x_lead0 + m.wheelset_x,
+                                               setup.speed, _wheel_labels(m))
+        limits = diagnosis_limits(setup)
+        self.cause, text = explain(setup.dt, limits, setup.irregularity_info, self.contact_loss,
+                                   setup.irregularity_config, setup.speed,
+                                   propose_auto=setup.propose_auto)
+        finite = q[np.isfinite(q)]
+        big = f"; largest vehicle displacement {np.abs(finite).max():.3f} m" if finite.size else ""
+        super().__init__(f"coupled simulation stopped at t = {self.t_s:.4f} s (leading wheelset at "
+                         f"x = {self.x_lead_m:.1f} m): {STATUS_MESSAGES[status]}{big}; {text}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -162,13 +200,18 @@ def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, 
                   mon_ptr, mon_dof, mon_coef, mon_qty, mon_scale,
                   dt, n_steps, out_every,
                   t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak,
-                  creep_relax=0.0):
+                  contact_loss, creep_relax=0.0):
     """Zhai explicit integration of vehicle + structure; returns (status, step).
 
     Outputs every ``out_every`` steps (row 0 = t 0): wheel_hist[row, ws, side] = (F_x, F_y, F_z,
-    y_rel); q_hist/a_hist vehicle displacements/accelerations; mon_hist monitor values (scaled).
-    Peaks over every step: wheel_peak[ws, side] = (max F_z, min F_z, max |F_y|, max |F_y|/F_z),
-    h_peak[ws] = max |F_y,left + F_y,right|, mon_peak[m] = max |monitor|.
+    y_rel, N) with N the Hertz normal force (> 0: in contact); q_hist/a_hist vehicle
+    displacements/accelerations; mon_hist monitor values (scaled).
+    Peaks over every step: wheel_peak[ws, side] = (max F_z, min F_z, max |F_y|, max |F_y|/F_z
+    over the steps in contact), h_peak[ws] = max |F_y,left + F_y,right|, mon_peak[m] =
+    max |monitor|. Loss of contact (N = 0) at every step, per wheel, in steps:
+    contact_loss[ws, side] = (events, steps without contact, longest event, its first step,
+    first step of the event under way or -1, first step of the first event or -1); step s is the
+    state at t = s dt, so an event of k steps lasts k dt.
     Status 0 ok, 1 non-finite, 2 all wheels off the rail, 3 vehicle divergence.
     ``creep_relax`` > 0: semi-implicit lateral creep (its state starts from the explicit law at
     t = 0).
@@ -202,28 +245,39 @@ def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, 
                       f_const, ws_dofs, ws_x0, speed, table, scal, head_height, irr, irr_slope,
                       irr_x0, irr_dx, packed, disp, vel, acc, nodal_force, ws_x, rail_kin, f_veh,
                       wheel, row, tmp, creep_state, creep_relax)
-        # peaks at every step
+        # peaks and loss of contact at every step
         in_contact = 0
+        step = n + 1
         for w in range(n_ws):
             h = 0.0
             for k in range(2):
                 fz = wheel[w, k, 2]
                 fy = wheel[w, k, 1]
                 h += fy
-                if wheel[w, k, 4] > 0.0:
-                    in_contact += 1
                 if fz > wheel_peak[w, k, 0]:
                     wheel_peak[w, k, 0] = fz
                 if fz < wheel_peak[w, k, 1]:
                     wheel_peak[w, k, 1] = fz
                 if abs(fy) > wheel_peak[w, k, 2]:
                     wheel_peak[w, k, 2] = abs(fy)
-                if fz > 0.0:
-                    qp = abs(fy) / fz
-                    if qp > wheel_peak[w, k, 3]:
-                        wheel_peak[w, k, 3] = qp
-                elif abs(fy) > 0.0:
-                    wheel_peak[w, k, 3] = np.inf
+                if wheel[w, k, 4] > 0.0:
+                    in_contact += 1
+                    contact_loss[w, k, 4] = -1
+                    if fz > 0.0:   # Q/P is defined in contact only
+                        qp = abs(fy) / fz
+                        if qp > wheel_peak[w, k, 3]:
+                            wheel_peak[w, k, 3] = qp
+                else:
+                    if contact_loss[w, k, 4] < 0:
+                        contact_loss[w, k, 0] += 1
+                        contact_loss[w, k, 4] = step
+                        if contact_loss[w, k, 5] < 0:
+                            contact_loss[w, k, 5] = step
+                    contact_loss[w, k, 1] += 1
+                    run = step - contact_loss[w, k, 4] + 1
+                    if run > contact_loss[w, k, 2]:
+                        contact_loss[w, k, 2] = run
+                        contact_loss[w, k, 3] = contact_loss[w, k, 4]
             if abs(h) > h_peak[w]:
                 h_peak[w] = abs(h)
         if in_contact == 0:
@@ -264,6 +318,7 @@ def _coupled_loop(q, v, a, a_prev, inv_mass, k_ptr, k_idx, k_val, c_ptr, c_idx, 
                     wheel_hist[out_row, w, k, 1] = wheel[w, k, 1]
                     wheel_hist[out_row, w, k, 2] = wheel[w, k, 2]
                     wheel_hist[out_row, w, k, 3] = wheel[w, k, 5]
+                    wheel_hist[out_row, w, k, 4] = wheel[w, k, 4]
             out_row += 1
     return 0, n_steps
 
@@ -366,14 +421,11 @@ def contact_time_step_limit(model: TrainModel, geom: ContactGeometry, speed: flo
     ``rail_inv_mass_*``: largest inverse mass of a rail node (z) and of the rail head (y).
     """
     p_max = 2.0 * float(model.static_wheel_load.max())
-    k_h = 1.5 * p_max ** (1.0 / 3.0) / geom.hertz_g
+    k_h = hertz_stiffness(p_max, geom.hertz_g)
     m_w = 0.5 * min(c.wheelset_mass for c in model.params.cars)
     omega = np.sqrt(k_h * (1.0 / m_w + rail_inv_mass_z))
     dt_hertz = 0.9 * 2.0 / omega
-    tab = geom.table[geom.table.shape[0] // 2]
-    c = (3.0 * p_max * (1 - geom.poisson ** 2) / (2 * geom.youngs_modulus * tab[6])) ** (1 / 3)
-    ab = tab[4] * tab[5] * c * c
-    f11, f22 = geom.shear_modulus * ab * tab[7], geom.shear_modulus * ab * tab[8]
+    f11, f22, _, _ = creep_coefficients(geom, p_max)
     spin_inertia = min(c_.wheelset_spin_inertia for c_ in model.params.cars)
     dt_spin = 0.9 * 2.0 * spin_inertia / (2 * f11 * geom.wheel_radius ** 2 / speed)
     # lateral: wheelset (two wheels, mass 2 m_w) against the rail head of one wheel
@@ -411,8 +463,143 @@ def coupled_time_step_limit(structure, limits: Mapping[str, Any], safety: float 
     crit = zhai_critical_omega_dt(round(max(float(info["zeta"]), 0.0), 6))
     return {"dt_structure_s": 0.9 * float(info["dt_limit_s"]),
             "dt_structure_limit_s": float(info["dt_limit_s"]),
+            "structure_frequency_hz": float(info["frequency_hz"]),
+            "structure_zeta": float(info["zeta"]),
             "omega_structure_rad_s": w_s, "dt_coupled_s": float(safety * crit / w_c),
             "dt_coupled_limit_s": float(crit / w_c)}
+
+
+def floor_significant(x: float, digits: int = 2) -> float:
+    """x rounded DOWN to ``digits`` significant digits; the printed value ``f'{r:.{digits}g}'``
+    parses back to a number <= x (a proposed step must pass the limit it was derived from)."""
+    if not np.isfinite(x) or x <= 0:
+        return float(x)
+    e = int(np.floor(np.log10(x))) - (digits - 1)
+    m = int(np.floor(x / 10.0 ** e * (1.0 - 1e-12)))
+    while m > 0 and float(f"{m}e{e}") > x:
+        m -= 1
+    return float(f"{m}e{e}")
+
+
+#: Names of the stability limits in messages and in the summary's ``dt_limits``.
+LIMIT_NAMES = {"structure": "structure", "coupled": "coupled rail-contact",
+               "hertz": "Hertz contact", "creep_spin": "creep spin",
+               "creep_lateral": "creep lateral", "vehicle": "vehicle suspension"}
+
+
+def step_limits(limits: Mapping[str, Any]) -> dict[str, float]:
+    """Every stability limit of a case that applies (s, safety factors included), by
+    :data:`LIMIT_NAMES` key: a step at or below their minimum passes every check of
+    :func:`prepare`. Structure and coupled limits only when they were computed (a structure,
+    and ``check_time_step`` or ``auto``); creep lateral only with ``lateral_creep: explicit``."""
+    out = {}
+    if "dt_structure_s" in limits:
+        out["structure"] = float(limits["dt_structure_s"])
+        out["coupled"] = float(limits["dt_coupled_s"])
+    out["hertz"] = float(limits["dt_hertz_s"])
+    out["creep_spin"] = float(limits["dt_creep_spin_s"])
+    if limits.get("lateral_creep") == "explicit":
+        out["creep_lateral"] = float(limits["dt_creep_lateral_s"])
+    if "dt_vehicle_s" in limits:
+        out["vehicle"] = float(limits["dt_vehicle_s"])
+    return out
+
+
+def proposed_time_step(limits: Mapping[str, Any]) -> float:
+    """The step a message proposes: min of :func:`step_limits` rounded down to 2 digits."""
+    return floor_significant(min(step_limits(limits).values()), 2)
+
+
+def _limit_list(limits: Mapping[str, Any]) -> str:
+    lims = step_limits(limits)
+    text = ", ".join(f"{LIMIT_NAMES[k]} {v:.3g} s" for k, v in sorted(lims.items(), key=lambda kv: kv[1]))
+    if "structure" not in lims:
+        text += ("; rigid track: no structure limit" if limits.get("track") == "rigid" else
+                 "; structure and coupled limits not computed: simulation.check_time_step false")
+    return text
+
+
+def time_step_remedy(limits: Mapping[str, Any], propose_auto: bool) -> str:
+    """'set simulation.time_step_s <= N ...': N passes every limit (rounded down, 2 digits)."""
+    text = (f"set simulation.time_step_s <= {proposed_time_step(limits):.2g}, which passes every "
+            f"stability limit of this case ({_limit_list(limits)})")
+    if propose_auto:
+        return text + ", or time_step_s: auto (the smallest of these limits)"
+    return (text + "; in a study every sample uses this one step, and random properties move the "
+            "structure and coupled limits from sample to sample: leave a margin below this "
+            "sample's limits")
+
+
+def _violation_text(key: str, dt: float, limits: Mapping[str, Any]) -> str:
+    """What a violated limit is and what moves it (the old per-check messages)."""
+    if key == "structure":
+        return (f"the Zhai stability limit {limits['dt_structure_limit_s']:.3g} s of this structure "
+                f"(mode at {limits['structure_frequency_hz']:.0f} Hz, damping ratio "
+                f"{limits['structure_zeta']:.3f}; structure.rail.rotary_inertia_scaling or a coarser "
+                "structure.slab.element_length_m raises it, docs/structure.md)")
+    if key == "coupled":
+        return (f"the coupled rail-contact stability limit {limits['dt_coupled_s']:.3g} s (safety 0.9) "
+                f"of this structure (highest structural mode "
+                f"{limits['omega_structure_rad_s'] / (2 * np.pi):.0f} Hz plus the Hertz contact mode "
+                f"{limits['omega_hertz_rad_s'] / (2 * np.pi):.0f} Hz on the lightest rail node; with "
+                "random rail properties a light or stiff rail element lowers it)")
+    if key == "contact":
+        return (f"the wheel-rail contact stability limit {limits['dt_s']:.3g} s (Hertz "
+                f"{limits['dt_hertz_s']:.3g} s, creep {limits['dt_creep_spin_s']:.3g} s spin, "
+                f"{limits['dt_creep_lateral_s']:.3g} s lateral, {limits['lateral_creep']}; creep "
+                "damping grows as 1/V: low speeds need smaller steps; simulation.lateral_creep: "
+                "semi_implicit removes the lateral creep limit)")
+    return (f"the vehicle suspension stability limit {limits['dt_vehicle_s']:.3g} s (safety "
+            f"{VEHICLE_SAFETY}; Zhai amplification of the linearised car on a fixed rail, first mode "
+            f"to diverge: {limits['vehicle_mode']}: a light body on stiff springs or strong dampers; "
+            "check the train parameters, vehicle/stability.py)")
+
+
+def resolve_time_step(sim: Mapping[str, Any], model: TrainModel, geom: ContactGeometry,
+                      speed: float, structure, limits: dict, *, propose_auto: bool = False
+                      ) -> float:
+    """The step of a case from ``simulation.time_step_s`` after every stability check.
+
+    ``limits`` (the contact limits) is completed in place with the vehicle limit
+    (:func:`ttbpipe.vehicle.stability.vehicle_time_step_limit`) and, on a structure with
+    ``check_time_step`` (default) or ``auto``, the structure and coupled limits
+    (:func:`coupled_time_step_limit`). ``auto`` is the smallest of them (:func:`step_limits`).
+    A number is refused when it exceeds the structure's limit, the coupled limit, the contact
+    limit (``dt_s``) or the vehicle limit (also checked directly at dt / safety: one spectral
+    radius per car); the message names every violated limit and proposes a step that passes
+    all of them (:func:`time_step_remedy`), with ``auto`` only if ``propose_auto``.
+    """
+    dt_setting = sim.get("time_step_s", 1.0e-4)
+    check = sim.get("check_time_step", True)
+    lateral_creep = limits["lateral_creep"]
+    limits["track"] = "rigid" if structure is None else "structure"
+    limits.update(vehicle_time_step_limit(model, geom, speed, lateral_creep))
+    if structure is not None and (dt_setting == "auto" or check):
+        # on the model actually integrated (random-property factors applied above)
+        limits.update(coupled_time_step_limit(structure, limits))
+    if dt_setting == "auto":
+        dt = min(step_limits(limits).values())
+        log.info("time_step_s auto: %.3g s (%s)", dt, _limit_list(limits))
+        return float(dt)
+    dt = float(dt_setting)
+    if not dt > 0:
+        raise ValueError(f"simulation.time_step_s must be positive, got {dt_setting!r}")
+    violated = []
+    if structure is not None and check:
+        if dt > limits["dt_structure_limit_s"]:
+            violated.append("structure")
+        if dt > limits["dt_coupled_s"] * (1 + 1e-9):
+            violated.append("coupled")
+    if dt > limits["dt_s"]:
+        violated.append("contact")
+    if dt > limits["dt_vehicle_s"] * (1 + 1e-9) or not vehicle_step_is_stable(
+            model, geom, speed, dt / VEHICLE_SAFETY, lateral_creep):
+        violated.append("vehicle")
+    if violated:
+        raise ValueError(f"simulation.time_step_s={dt:g} s exceeds "
+                         + " and ".join(_violation_text(k, dt, limits) for k in violated)
+                         + "; " + time_step_remedy(limits, propose_auto))
+    return dt
 
 
 def rail_inverse_masses(packed, head_height: float) -> tuple[float, float]:
@@ -461,6 +648,9 @@ class CoupledSetup:
     dt_limits: dict
     static_iterations: int
     creep_relax: float = 0.0   # semi-implicit lateral creep: m_eff^-1 dt / V (0: explicit)
+    irregularity_info: dict = field(default_factory=dict)   # diagnosis.irregularity_indicators
+    irregularity_config: dict = field(default_factory=dict)  # the case's irregularity section
+    propose_auto: bool = False  # messages may offer time_step_s: auto (prepare)
 
 
 def _rail_kin_at(packed, disp, ws_x, head_height, irr: Irregularity) -> np.ndarray:
@@ -500,8 +690,14 @@ def static_equilibrium(model, geom, speed, packed, structure_static, head_height
                        "iterations; check the structure supports and the suspension stiffness")
 
 
-def prepare(case: Mapping[str, Any]) -> CoupledSetup:
-    """Build the train, contact, structure, irregularity and the static state of a case."""
+def prepare(case: Mapping[str, Any], *, propose_auto: bool = False) -> CoupledSetup:
+    """Build the train, contact, structure, irregularity and the static state of a case.
+
+    ``propose_auto``: a refused time step's message may offer ``time_step_s: auto`` besides the
+    concrete step (``ttbpipe simulate``, one case). Off by default: in a study every sample must
+    use the same step (one time grid), so ``auto``, which takes each sample's own limit, is
+    not a remedy there. ``auto`` itself is accepted either way (see :func:`resolve_time_step`).
+    """
     case = dict(case or {})
     sim = dict(case.get("simulation") or {})
     train_cfg = dict(case.get("train") or {})
@@ -565,40 +761,7 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
         # the lateral creep damper is integrated semi-implicitly (unconditionally stable;
         # docs/performance.md): only the Hertz and spin limits bound the step
         limits["dt_s"] = float(min(limits["dt_hertz_s"], limits["dt_creep_spin_s"]))
-    dt_setting = sim.get("time_step_s", 1.0e-4)
-    check = sim.get("check_time_step", True)
-    sinfo = None
-    if structure is not None and (dt_setting == "auto" or check):
-        # on the model actually integrated (random-property factors applied above)
-        sinfo = coupled_time_step_limit(structure, limits)
-        limits.update(sinfo)
-    if dt_setting == "auto":
-        dt = limits["dt_s"]
-        if sinfo is not None:
-            dt = min(dt, sinfo["dt_structure_s"], sinfo["dt_coupled_s"])
-        log.info("time_step_s auto: %.3g s (contact limit %.3g s)", dt, limits["dt_s"])
-    else:
-        dt = float(dt_setting)
-    if sinfo is not None and check:
-        if dt > sinfo["dt_structure_limit_s"]:
-            from ..structure.integrator import check_time_step
-            check_time_step(structure, dt)   # the structure's own error and remedy
-        if dt > sinfo["dt_coupled_s"] * (1 + 1e-9):
-            raise ValueError(
-                f"simulation.time_step_s={dt:g} s exceeds the coupled rail-contact stability limit "
-                f"{sinfo['dt_coupled_s']:.3g} s (safety 0.9) of this structure (highest structural mode "
-                f"{sinfo['omega_structure_rad_s'] / (2 * np.pi):.0f} Hz plus the Hertz contact mode "
-                f"{limits['omega_hertz_rad_s'] / (2 * np.pi):.0f} Hz on the lightest rail node; with "
-                "random rail properties a light or stiff rail element lowers it); set "
-                f"simulation.time_step_s <= {sinfo['dt_coupled_s']:.3g} or time_step_s: auto")
-    if dt > limits["dt_s"]:
-        raise ValueError(f"simulation.time_step_s={dt:g} s exceeds the wheel-rail contact stability "
-                         f"limit {limits['dt_s']:.3g} s (Hertz {limits['dt_hertz_s']:.3g} s, creep "
-                         f"{limits['dt_creep_spin_s']:.3g} s spin, "
-                         f"{limits['dt_creep_lateral_s']:.3g} s lateral, {lateral_creep}); "
-                         "reduce simulation.time_step_s (creep damping grows as 1/V: low speeds "
-                         "need smaller steps; simulation.lateral_creep: semi_implicit removes "
-                         "the lateral creep limit)")
+    dt = resolve_time_step(sim, model, geom, speed, structure, limits, propose_auto=propose_auto)
     if sim.get("output_every") is not None:
         out_every = int(sim["output_every"])
     else:
@@ -614,11 +777,23 @@ def prepare(case: Mapping[str, Any]) -> CoupledSetup:
     f_const = model.gravity_force + model.coupler_stiffness @ q0
     creep_relax = (limits["lateral_creep_inverse_mass_1_kg"] * dt / speed
                    if lateral_creep == "semi_implicit" else 0.0)
+    from .diagnosis import PLAUSIBLE_D1_PEAK_MM, irregularity_indicators
+    irr_info = irregularity_indicators(irr, speed, model)
+    if (irr_info["contact_demand_ratio"] > 1.0 or max(irr_info["peak_vertical_d1_mm"],
+                                                      irr_info["peak_lateral_d1_mm"]) > PLAUSIBLE_D1_PEAK_MM):
+        log.warning("irregularity: peak %.1f mm vertical, %.1f mm lateral in 3-25 m (plausible at "
+                    "most %.0f mm); its curvature asks for %.1f times the wheel acceleration "
+                    "contact can give at %.0f km/h: expect loss of wheel-rail contact",
+                    irr_info["peak_vertical_d1_mm"], irr_info["peak_lateral_d1_mm"],
+                    PLAUSIBLE_D1_PEAK_MM, irr_info["contact_demand_ratio"], speed * 3.6)
     return CoupledSetup(train=train, model=model, geom=geom, speed=speed, dt=dt, n_steps=n_steps,
                         out_every=out_every, x_lead0=x_lead0, irregularity=irr, structure=structure,
                         packed=packed, head_height=head_height, monitors=monitors, q0=q0, v0=v0,
                         disp0=disp0, f_const=f_const, static_wheel=wheel0, dt_limits=limits,
-                        static_iterations=iters, creep_relax=creep_relax)
+                        static_iterations=iters, creep_relax=creep_relax,
+                        irregularity_info=irr_info,
+                        irregularity_config=dict(case.get("irregularity") or {}),
+                        propose_auto=propose_auto)
 
 
 @dataclass
@@ -626,7 +801,7 @@ class RawResult:
     """Arrays returned by the loop (before the table is built)."""
 
     time: np.ndarray
-    wheel: np.ndarray      # (n_out, n_ws, 2, 4): F_x, F_y, F_z, y_rel
+    wheel: np.ndarray      # (n_out, n_ws, 2, 5): F_x, F_y, F_z, y_rel, N (normal force)
     q: np.ndarray
     a: np.ndarray
     monitors: np.ndarray
@@ -634,6 +809,7 @@ class RawResult:
     h_peak: np.ndarray
     monitor_peak: np.ndarray
     wall_s: float
+    contact_loss: np.ndarray | None = None   # (n_ws, 2, 6) int64 steps, see _coupled_loop
 
 
 def integrate(setup: CoupledSetup) -> RawResult:
@@ -658,7 +834,7 @@ def integrate(setup: CoupledSetup) -> RawResult:
         mon_qty, mon_scale = np.zeros(0, np.int64), np.zeros(0)
     n_mon = mon_ptr.size - 1
     t_out = np.zeros(n_out)
-    wheel_hist = np.zeros((n_out, m.n_wheelsets, 2, 4))
+    wheel_hist = np.zeros((n_out, m.n_wheelsets, 2, 5))
     q_hist = np.zeros((n_out, n_v))
     a_hist = np.zeros((n_out, n_v))
     mon_hist = np.zeros((n_out, n_mon))
@@ -666,6 +842,8 @@ def integrate(setup: CoupledSetup) -> RawResult:
     wheel_peak[:, :, 1] = np.inf
     h_peak = np.zeros(m.n_wheelsets)
     mon_peak = np.zeros(n_mon)
+    contact_loss = np.zeros((m.n_wheelsets, 2, 6), dtype=np.int64)
+    contact_loss[:, :, 3:] = -1
     ws_x0 = setup.x_lead0 + m.wheelset_x
     irr = setup.irregularity
     t0 = time.perf_counter()
@@ -678,12 +856,12 @@ def integrate(setup: CoupledSetup) -> RawResult:
         mon_ptr, mon_dof, mon_coef, mon_qty, mon_scale,
         setup.dt, setup.n_steps, setup.out_every,
         t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak,
-        setup.creep_relax)
+        contact_loss, setup.creep_relax)
     wall = time.perf_counter() - t0
     if status != 0:
-        raise RuntimeError(f"coupled simulation stopped at t = {(step + 1) * setup.dt:.4f} s: "
-                           f"{STATUS_MESSAGES[status]}")
-    return RawResult(t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak, wall)
+        raise SimulationStopped(setup, status, step, contact_loss, q)
+    return RawResult(t_out, wheel_hist, q_hist, a_hist, mon_hist, wheel_peak, h_peak, mon_peak,
+                     wall, contact_loss)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -708,7 +886,14 @@ def carbody_accelerations(setup: CoupledSetup, a_hist: np.ndarray) -> dict[str, 
 
 
 def results_table(setup: CoupledSetup, raw: RawResult) -> pd.DataFrame:
-    """Time histories: wheel forces, Q/P, unloading, H, car-body accelerations, monitors."""
+    """Time histories: wheel forces, contact flag, Q/P, unloading, H, car-body accelerations,
+    monitors.
+
+    ``<wheel>_in_contact`` (int8, 1/0): normal force N > 0 and P > 0 at that output step. Q/P is
+    defined in contact only: |Q|/P there and 0 where the wheel is off the rail (a lifted wheel
+    with a flange force would give |Q|/0); the unloading (P0 - P)/P0 is 1 there. The loss of
+    contact itself is its own index (summary ``contact_loss_*``).
+    """
     m = setup.model
     labels = _wheel_labels(m)
     p0 = setup.static_wheel[:, :, 2]
@@ -718,11 +903,11 @@ def results_table(setup: CoupledSetup, raw: RawResult) -> pd.DataFrame:
         for k, side in enumerate(("left", "right")):
             p = raw.wheel[:, w, k, 2]
             qf = raw.wheel[:, w, k, 1]
+            contact = (raw.wheel[:, w, k, 4] > 0.0) & (p > 0.0)
             cols[f"{lab}_{side}_P_N"] = p
             cols[f"{lab}_{side}_Q_N"] = qf
-            with np.errstate(divide="ignore", invalid="ignore"):
-                qp = np.where(p > 0, np.abs(qf) / np.where(p > 0, p, 1.0), np.where(qf != 0, np.inf, 0.0))
-            cols[f"{lab}_{side}_QP"] = qp
+            cols[f"{lab}_{side}_in_contact"] = contact.astype(np.int8)
+            cols[f"{lab}_{side}_QP"] = np.where(contact, np.abs(qf) / np.where(contact, p, 1.0), 0.0)
             cols[f"{lab}_{side}_unloading"] = (p0[w, k] - p) / p0[w, k]
         cols[f"{lab}_H_N"] = raw.wheel[:, w, 0, 1] + raw.wheel[:, w, 1, 1]
         cols[f"{lab}_y_mm"] = 1e3 * raw.q[:, m.wheelset_dofs[w, Y]]
@@ -754,7 +939,12 @@ def summarise(setup: CoupledSetup, raw: RawResult, table: pd.DataFrame) -> dict:
         "max_wheel_unloading": float(unloading.max()),
         "max_wheelset_lateral_force_N": float(raw.h_peak.max()),
         "contact": setup.geom.description,
+        "irregularity": dict(setup.irregularity_info),
     }
+    if raw.contact_loss is not None:
+        from .diagnosis import contact_loss_stats
+        summary.update(contact_loss_stats(raw.contact_loss, setup.dt, setup.x_lead0 + m.wheelset_x,
+                                          setup.speed, labels))
     if setup.monitors is not None:
         summary["monitor_peaks"] = {name: float(raw.monitor_peak[i])
                                     for i, name in enumerate(setup.monitors.names)}
@@ -777,16 +967,77 @@ def summarise(setup: CoupledSetup, raw: RawResult, table: pd.DataFrame) -> dict:
     return summary
 
 
+def diagnosis_limits(setup: CoupledSetup) -> dict:
+    """The setup's dt_limits, with the structure and coupled limits computed now if the case
+    skipped them (``check_time_step: false``): a diagnosis weighs the step against all."""
+    limits = dict(setup.dt_limits)
+    if setup.structure is not None and "dt_structure_s" not in limits:
+        limits.update(coupled_time_step_limit(setup.structure, limits))
+    return limits
+
+
+def _nonfinite_entries(summary: Mapping[str, Any], prefix: str = "") -> list[str]:
+    bad = []
+    for key, value in summary.items():
+        if isinstance(value, Mapping):
+            bad += _nonfinite_entries(value, f"{prefix}{key}.")
+        elif isinstance(value, (float, np.floating)) and not np.isfinite(value):
+            bad.append(f"{prefix}{key}")
+    return bad
+
+
+def check_finite(setup: CoupledSetup, raw: RawResult, table: pd.DataFrame, summary: dict) -> None:
+    """Raise ValueError naming the column(s) and summary key(s) with a non-finite value and the
+    likely cause (:func:`ttbpipe.simulation.diagnosis.explain`): nothing non-finite reaches a
+    results table."""
+    values = table.to_numpy(dtype=float)
+    bad_rows = ~np.isfinite(values)
+    columns = [c for c, b in zip(table.columns, bad_rows.any(axis=0)) if b]
+    keys = _nonfinite_entries(summary)
+    if not columns and not keys:
+        return
+    from .diagnosis import explain
+    where = ""
+    if columns:
+        row = int(np.flatnonzero(bad_rows.any(axis=1))[0])
+        where = (f" (first at t = {table['time_s'].iloc[row]:.4f} s, leading wheelset at x = "
+                 f"{table['x_lead_m'].iloc[row]:.1f} m)")
+    loss = {k: v for k, v in summary.items() if k.startswith("contact_loss")}
+    _, text = explain(setup.dt, diagnosis_limits(setup), setup.irregularity_info, loss,
+                      setup.irregularity_config, setup.speed, propose_auto=setup.propose_auto)
+    raise ValueError(f"non-finite values in the coupled run's results: column(s) {columns[:8]}"
+                     f"{' ...' if len(columns) > 8 else ''} ({len(columns)} in all){where}, "
+                     f"summary key(s) {keys}; the loop only stops on a non-finite vehicle or "
+                     f"structure state, so this is a defect of the post-processing or of an "
+                     f"input; {text}")
+
+
 @pinned
-def run_coupled(case_config: Mapping[str, Any]) -> tuple[pd.DataFrame, dict]:
-    """Run one coupled case: (time-history table, summary dict). See the module docstring."""
-    setup = prepare(case_config)
+def run_coupled(case_config: Mapping[str, Any], *, propose_auto: bool = False
+                ) -> tuple[pd.DataFrame, dict]:
+    """Run one coupled case: (time-history table, summary dict). See the module docstring.
+
+    Raises :class:`SimulationStopped` (a RuntimeError) when the loop stops, with the likely
+    cause, and ValueError for a refused time step (``propose_auto``: see :func:`prepare`) or a
+    non-finite result (:func:`check_finite`). A run in which wheels lose contact completes: the
+    loss is reported (summary ``contact_loss_*``, a warning with its likely cause).
+    """
+    setup = prepare(case_config, propose_auto=propose_auto)
     log.info("coupled run: %d cars, %.1f km/h, dt %.2e s, %d steps, track %s", setup.train.n_cars,
              setup.speed * 3.6, setup.dt, setup.n_steps,
              "rigid" if setup.structure is None else f"{setup.packed.n_dof} structural DOF")
     raw = integrate(setup)
     table = results_table(setup, raw)
     summary = summarise(setup, raw, table)
+    check_finite(setup, raw, table, summary)
+    if summary["contact_loss_count"] > 0:
+        from .diagnosis import explain
+        _, text = explain(setup.dt, diagnosis_limits(setup), setup.irregularity_info,
+                          summary, setup.irregularity_config, setup.speed,
+                          propose_auto=propose_auto, stopped=False)
+        log.warning("wheel-rail contact lost %d times on %d wheel(s), longest %.1f ms: %s",
+                    summary["contact_loss_count"], summary["contact_loss_wheels"],
+                    1e3 * summary["contact_loss_max_s"], text)
     log.info("coupled run done: %.1f s wall, %.2f s per simulated s", raw.wall_s,
              summary["wall_s_per_simulated_s"])
     return table, summary

@@ -118,6 +118,13 @@ RESPONSE_INDEX_COLUMNS: tuple[ColumnSpec, ...] = (
     ColumnSpec("max_girder_vertical_disp_m", "float64", "m",
                "maximum over the run and the girder monitors of |vertical girder displacement|",
                lower=0.0),
+    ColumnSpec("contact_loss_count", "float64", "1",
+               "number of losses of wheel-rail contact (runs of steps with zero normal force) "
+               "over the run and all wheels; 0 when every wheel stays on the rail", lower=0.0),
+    ColumnSpec("contact_loss_total_duration_s", "float64", "s",
+               "time without wheel-rail contact over the run, summed over the wheels", lower=0.0),
+    ColumnSpec("contact_loss_max_duration_s", "float64", "s",
+               "longest single loss of wheel-rail contact over the run and all wheels", lower=0.0),
 )
 
 EXTREMES_COLUMNS: tuple[ColumnSpec, ...] = (

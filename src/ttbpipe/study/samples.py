@@ -212,6 +212,10 @@ def extremes_from_run(table: pd.DataFrame, summary: Mapping[str, Any], sim: Mapp
         "max_wheel_lateral_force_N": float(summary["max_lateral_wheel_force_N"]),
         "max_carbody_vertical_acc_m_s2": float(summary["max_carbody_vertical_acc_m_s2"]),
         "max_carbody_lateral_acc_m_s2": float(summary["max_carbody_lateral_acc_m_s2"]),
+        # loss of wheel-rail contact, its own index (Q/P is defined in contact only)
+        "contact_loss_count": float(summary["contact_loss_count"]),
+        "contact_loss_total_duration_s": float(summary["contact_loss_total_s"]),
+        "contact_loss_max_duration_s": float(summary["contact_loss_max_s"]),
     }
     sperling = summary["sperling"]
     for direction in ("vertical", "lateral"):
@@ -239,22 +243,16 @@ def extremes_from_run(table: pd.DataFrame, summary: Mapping[str, Any], sim: Mapp
             if col in table.columns:
                 out[f"max_span{s}_{name}_acc_m_s2"] = _lowpass_peak(table[col].to_numpy(float),
                                                                    dt_out, cutoff)
-    if np.isposinf(out["max_derailment_coefficient"]):
-        # A wheel lifted off (P = 0) while carrying a lateral force: Q/P is infinite at those
-        # steps. That is a physical event (the unloading ratio is 1 and exceeds its limit), not
-        # numerical trouble; Q/P is reported as its largest value over the output steps with
-        # the wheel in contact, and the lift is logged with its count.
-        qp = table[[c for c in table.columns if c.endswith("_QP")]].to_numpy(float)
-        lifted = ~np.isfinite(qp)
-        out["max_derailment_coefficient"] = float(qp[~lifted].max()) if (~lifted).any() else 0.0
-        log.warning("wheel lift with lateral force at %d of %d wheel-output steps (unloading "
-                    "ratio %.2f): max derailment coefficient taken over the steps in contact, "
-                    "%.3f", int(lifted.sum()), qp.size, out["max_wheel_unloading_ratio"],
-                    out["max_derailment_coefficient"])
     bad = {k: v for k, v in out.items() if not np.isfinite(v)}
     if bad:
-        raise RuntimeError(f"non-finite response indices {bad}: numerical trouble in the run; "
-                           "reduce simulation.time_step_s")
+        from ..simulation.diagnosis import explain
+
+        _, cause = explain(float(summary["time_step_s"]), summary["dt_limits"],
+                           summary.get("irregularity", {}), summary, None,
+                           float(summary["speed_kmh"]) / 3.6, stopped=False)
+        raise RuntimeError(f"non-finite response indices {bad} (extremes column(s) {sorted(bad)}); "
+                           "the coupled run stops on a non-finite state and checks its table, so "
+                           f"a non-finite index here is a defect of the reduction or its input; {cause}")
     return out
 
 
@@ -266,17 +264,19 @@ def history_from_run(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) 
     """
     columns = _history_columns(table, sim, n_spans)
     out = {"position_m": table["x_lead_m"].to_numpy(float)}
+    bad = []
     for name, col in columns.items():
+        # derailment_coefficient: the run's Q/P, 0 at steps where the wheel is off the rail
+        # (defined in contact only; the loss of contact is the extremes' contact_loss_* index)
         values = table[col].to_numpy(float)
-        if name == "derailment_coefficient" and np.isposinf(values).any():
-            # wheel lift with lateral force (Q/P undefined, see extremes_from_run): those steps
-            # take the wheel's largest in-contact Q/P (conservative), logged with their count
-            lifted = np.isposinf(values)
-            values = np.where(lifted, values[~lifted].max() if (~lifted).any() else 0.0, values)
-            log.warning("history %s: wheel lift with lateral force at %d of %d output steps; "
-                        "Q/P there set to the wheel's largest in-contact value", col,
-                        int(lifted.sum()), values.size)
+        if not np.isfinite(values).all():
+            bad.append(col)
         out[name] = values * 1e-3 if col.endswith("_mm") else values
+    if bad:
+        raise ValueError(f"time-history column(s) {bad} of the coupled run have non-finite values "
+                         f"({[int((~np.isfinite(table[c].to_numpy(float))).sum()) for c in bad]} "
+                         "values); the run checks its table before returning, so this table did "
+                         "not come from ttbpipe.simulation.coupled.run_coupled unchanged")
     return pd.DataFrame(out)
 
 

@@ -96,6 +96,11 @@ def _hertz_force(penetration: float, g: float) -> float:
     return (penetration / g) ** 1.5
 
 
+def hertz_stiffness(load: float, g: float) -> float:
+    """Linearised Hertz stiffness dP/d(dZ) = 1.5 P^(1/3) / G (N/m) at normal load P (N)."""
+    return 1.5 * load ** (1.0 / 3.0) / g
+
+
 def hertz_ellipse_mn(curv_a: float, curv_b: float) -> tuple[float, float]:
     """Hertz coefficients (m_x, n_y) of the semi-axes along x (curvature A) and y (curvature B).
 
@@ -266,6 +271,18 @@ def _geometry(table: np.ndarray, p: ContactParameters, tread: str, desc: str) ->
 def build_geometry(p: ContactParameters) -> ContactGeometry:
     """Contact geometry for the configured profile (conical or table)."""
     return conical_geometry(p) if p.profile == "conical" else table_geometry(p)
+
+
+def creep_coefficients(geom: "ContactGeometry", load: float,
+                       row: np.ndarray | None = None) -> tuple[float, float, float, float]:
+    """Kalker coefficients f11, f22, f23, f33 at normal load ``load`` (N) on table row ``row``
+    (default: the centre row, y_rel = 0), as :func:`_wheel_contact` computes them."""
+    tab = geom.table[geom.table.shape[0] // 2] if row is None else row
+    c = (3.0 * load * (1 - geom.poisson ** 2) / (2 * geom.youngs_modulus * tab[COL_ABSUM])) ** (1 / 3)
+    ab = tab[COL_M] * tab[COL_N] * c * c
+    g = geom.shear_modulus
+    return g * ab * tab[COL_C11], g * ab * tab[COL_C22], g * ab ** 1.5 * tab[COL_C23], \
+        g * ab * ab * tab[COL_C33]
 
 
 def equivalent_conicity(geom: ContactGeometry, amplitude: float = 0.003) -> float:
