@@ -137,8 +137,9 @@ def test_rail_displacement_under_the_wheel_converges_with_monitor_spacing():
 
 
 def test_wheel_lift_is_reported_not_failed():
-    """A wheel that lifts off with a lateral force (P = 0, Q != 0: Q/P = inf, the coupled
-    table's convention) does not stop the study: the extremes take the largest in-contact Q/P
+    """A wheel that lifts off with a lateral force (P = 0: the coupled table flags the step
+    out of contact and writes Q/P = 0 there, Q/P being defined in contact only) does not stop
+    the study: the extremes take the run's largest in-contact Q/P and its contact-loss index,
     and the history replaces the lifted steps by the wheel's largest in-contact Q/P (so the
     history statistics stay finite and conservative). Other non-finite indices still fail."""
     from ttbpipe.study.samples import extremes_from_run, history_from_run, resolve_simulation
@@ -147,10 +148,11 @@ def test_wheel_lift_is_reported_not_failed():
     n = 50
     t = np.arange(n) * 2e-3
     qp = np.full(n, 0.1)
-    qp[10] = np.inf
+    qp[10] = 0.0
     qp[20] = 0.4
     table = pd.DataFrame({"time_s": t, "x_lead_m": 100 + 80 * t, "car1_ws1_left_QP": qp,
-                          "car1_ws1_left_P_N": np.where(np.isinf(qp), 0.0, 7e4),
+                          "car1_ws1_left_P_N": np.where(np.arange(n) == 10, 0.0, 7e4),
+                          "car1_ws1_left_in_contact": (np.arange(n) != 10).astype(np.int8),
                           "car1_ws1_left_Q_N": 1e3, "car1_body_front_az_m_s2": 0.0,
                           "car1_body_front_ay_m_s2": 0.0})
     for axis in ("z", "y"):
@@ -158,13 +160,16 @@ def test_wheel_lift_is_reported_not_failed():
         table[f"girder_span1_mid_{axis}_disp_mm"] = -0.5
         table[f"rail_left_span1_mid_{axis}_acc_m_s2"] = 1.0
     summary = {"speed_kmh": 300.0, "static_wheel_load_N": {"car1": [7e4]},
-               "max_derailment_coefficient": np.inf, "max_wheel_unloading": 1.0,
+               "max_derailment_coefficient": 0.4, "max_wheel_unloading": 1.0,
                "max_wheelset_lateral_force_N": 2e3, "max_wheel_load_N": 9e4,
                "max_lateral_wheel_force_N": 1e3, "max_carbody_vertical_acc_m_s2": 0.1,
-               "max_carbody_lateral_acc_m_s2": 0.1,
-               "sperling": {"car1_vertical": 1.5, "car1_lateral": 1.5}, "monitor_peaks": {}}
+               "max_carbody_lateral_acc_m_s2": 0.1, "contact_loss_count": 1,
+               "contact_loss_total_s": 2e-3, "contact_loss_max_s": 2e-3, "time_step_s": 1e-4,
+               "dt_limits": {}, "sperling": {"car1_vertical": 1.5, "car1_lateral": 1.5},
+               "monitor_peaks": {}}
     ext = extremes_from_run(table, summary, sim, 1)
     assert ext["max_derailment_coefficient"] == 0.4
+    assert ext["contact_loss_count"] == 1 and ext["contact_loss_max_duration_s"] == 2e-3
     hist = history_from_run(table, sim, 1)
     assert hist["derailment_coefficient"].iloc[10] == 0.4 and np.isfinite(hist.to_numpy()).all()
     with pytest.raises(RuntimeError, match="non-finite"):

@@ -496,8 +496,9 @@ def step_limits(limits: Mapping[str, Any]) -> dict[str, float]:
     if "dt_structure_s" in limits:
         out["structure"] = float(limits["dt_structure_s"])
         out["coupled"] = float(limits["dt_coupled_s"])
-    out["hertz"] = float(limits["dt_hertz_s"])
-    out["creep_spin"] = float(limits["dt_creep_spin_s"])
+    if "dt_hertz_s" in limits:   # absent only in a summary that was not made by prepare()
+        out["hertz"] = float(limits["dt_hertz_s"])
+        out["creep_spin"] = float(limits["dt_creep_spin_s"])
     if limits.get("lateral_creep") == "explicit":
         out["creep_lateral"] = float(limits["dt_creep_lateral_s"])
     if "dt_vehicle_s" in limits:

@@ -180,7 +180,7 @@ def explain(dt: float, limits: Mapping[str, Any], irr: Mapping[str, float],
                      "problem (it stays)" if stopped else
                      "the irregularity is plausible and its curvature within what contact holds: "
                      "check the wheel loads and the contact parameters")
-    if loss and loss.get("contact_loss_count", 0) > 0:
+    if loss and loss.get("contact_loss_count", 0) > 0 and "contact_loss_longest" in loss:
         lo, fi = loss["contact_loss_longest"], loss["contact_loss_first"]
         parts.append(f"wheel-rail contact {'before the stop' if stopped else 'in the run'}: "
                      f"{loss['contact_loss_count']} losses on {loss['contact_loss_wheels']} "

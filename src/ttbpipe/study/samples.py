@@ -256,6 +256,24 @@ def extremes_from_run(table: pd.DataFrame, summary: Mapping[str, Any], sim: Mapp
     return out
 
 
+def _qp_history(table: pd.DataFrame, qp_column: str, values: np.ndarray) -> np.ndarray:
+    """Q/P history of one wheel for the study's statistics: at output steps where the wheel is
+    off the rail (``<wheel>_in_contact`` = 0; the run writes Q/P = 0 there, Q/P being defined
+    in contact only) the wheel's largest in-contact Q/P of the run stands in. A lifted wheel is
+    the worst state for derailment, so a 0 would understate the risk in the mean and spread
+    curves; the largest in-contact value is finite and conservative. The loss itself is the
+    extremes' ``contact_loss_*`` index."""
+    flag = qp_column[:-len("_QP")] + "_in_contact"
+    if flag not in table.columns:
+        return values
+    off = table[flag].to_numpy() == 0
+    if not off.any():
+        return values
+    values = values.copy()
+    values[off] = float(values[~off].max()) if (~off).any() else 0.0
+    return values
+
+
 def history_from_run(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) -> pd.DataFrame:
     """Time-history block of one run against the leading wheelset's position (``position_m``).
 
@@ -266,11 +284,11 @@ def history_from_run(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) 
     out = {"position_m": table["x_lead_m"].to_numpy(float)}
     bad = []
     for name, col in columns.items():
-        # derailment_coefficient: the run's Q/P, 0 at steps where the wheel is off the rail
-        # (defined in contact only; the loss of contact is the extremes' contact_loss_* index)
         values = table[col].to_numpy(float)
         if not np.isfinite(values).all():
             bad.append(col)
+        if name == "derailment_coefficient":
+            values = _qp_history(table, col, values)
         out[name] = values * 1e-3 if col.endswith("_mm") else values
     if bad:
         raise ValueError(f"time-history column(s) {bad} of the coupled run have non-finite values "
