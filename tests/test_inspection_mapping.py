@@ -218,3 +218,16 @@ def test_config_with_a_mapping_validates():
     config["inspections"]["units"] = {"channels": "furlong"}
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate(config, schema)
+
+
+def test_documented_defaults_are_the_packages():
+    """The options table of docs/inspection_format.md shows CLEANING_DEFAULTS."""
+    import re
+
+    doc = (REPO / "docs" / "inspection_format.md").read_text()
+    rows = dict(re.findall(r"^\| `(\w+)` \| ([\w.]+) \|", doc, flags=re.M))
+    documented = {k: v for k, v in rows.items() if k in CLEANING_DEFAULTS}
+    assert set(documented) == set(CLEANING_DEFAULTS) - {"sampling_tolerance", "max_jitter"}
+    for key, text in documented.items():
+        default = CLEANING_DEFAULTS[key]
+        assert (text == default) if isinstance(default, str) else float(text) == default, key

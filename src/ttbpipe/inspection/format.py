@@ -74,6 +74,10 @@ _UNIT_NAMES = {"km": "kilometres", "m": "metres", "cm": "centimetres", "mm": "mi
                "ft": "feet"}
 
 
+# Other spellings of the units of CHAINAGE_UNITS_TO_M / CHANNEL_UNITS_TO_MM.
+_UNIT_SPELLINGS = {"µm": "um", "micron": "um", "microns": "um", "inch": "in", "inches": "in"}
+
+
 class InspectionError(ValueError):
     """A problem with an inspection file, naming the file, the data row and the column.
 
@@ -201,12 +205,16 @@ def unit_error_message(column: str) -> str | None:
         return None
     expected, unit, factor = mismatch
     expected_unit = expected.rpartition("_")[2]
-    unit_key = "chainage" if expected == CHAINAGE_COLUMN else expected
-    return (f"column {column!r} is in {_UNIT_NAMES.get(unit.lower(), unit)}; ttbpipe expects "
-            f"{expected!r} in {_UNIT_NAMES[expected_unit]}: multiply the values by {factor:g} "
-            f"and rename the column to {expected!r}, or map it in the configuration "
-            f"(inspections.columns: {{{column}: {expected}}}, inspections.units: "
-            f"{{{unit_key}: {unit.lower()}}})")
+    message = (f"column {column!r} is in {_UNIT_NAMES.get(unit.lower(), unit)}; ttbpipe expects "
+               f"{expected!r} in {_UNIT_NAMES[expected_unit]}: multiply the values by "
+               f"{factor:g} and rename the column to {expected!r}")
+    declared = _UNIT_SPELLINGS.get(unit.lower(), unit.lower())
+    accepted = CHAINAGE_UNITS_TO_M if expected == CHAINAGE_COLUMN else CHANNEL_UNITS_TO_MM
+    if declared in accepted:
+        unit_key = "chainage" if expected == CHAINAGE_COLUMN else expected
+        message += (f", or map it in the configuration (inspections.columns: "
+                    f"{{{column}: {expected}}}, inspections.units: {{{unit_key}: {declared}}})")
+    return message
 
 
 _NA_TEXT = re.compile(r"^\s*(|nan|na|n/a|null|none|-nan|<na>)\s*$", re.IGNORECASE)
