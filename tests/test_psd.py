@@ -195,6 +195,21 @@ def test_cli_psd_clean_and_raw(tmp_path, synthetic_campaign):
     # the raw file went through the inspection cleaning (linear detrend per file), so the
     # estimates agree closely but not bit for bit: 1 % on the band-averaged PSD
     assert from_raw["psd_mm2_m"].mean() == pytest.approx(from_clean["psd_mm2_m"].mean(), rel=0.01)
+    # a raw file with its own column names and units, read through the --config mapping
+    import yaml
+
+    own = campaign.rename(columns={"chainage_m": "KM"}).assign(KM=campaign["chainage_m"] / 1000)
+    own_path = tmp_path / "2024-01-02.csv"
+    own.to_csv(own_path, index=False, float_format="%.10g")
+    config = tmp_path / "study.yaml"
+    config.write_text(yaml.safe_dump({"inspections": {"columns": {"KM": "chainage_m"},
+                                                      "units": {"chainage": "km"}}}))
+    out_own = tmp_path / "psd_own.parquet"
+    assert main(["psd", str(own_path), "--section-length-m", "1000", "--out", str(out_own)]) == 1
+    assert main(["psd", str(own_path), "--section-length-m", "1000", "--config", str(config),
+                 "--out", str(out_own)]) == 0
+    np.testing.assert_allclose(read_table(out_own)["psd_mm2_m"], from_raw["psd_mm2_m"],
+                               rtol=1e-6)
     bad_out = tmp_path / "bad.parquet"
     assert main(["psd", str(clean_path), "--section-length-m", "500", "--segment-length-m",
                  "1000", "--out", str(bad_out)]) == 1

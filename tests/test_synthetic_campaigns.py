@@ -167,7 +167,7 @@ def test_workflow_scripts(tmp_path):
     assert read_provenance(outputs[1])["config"] == config
     clean_path, repairs_path = tmp_path / "clean.parquet", tmp_path / "clean.repairs.json"
     fake = types.SimpleNamespace(
-        config=config, params=types.SimpleNamespace(cleaning=cleaning, version="t"),
+        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping={}, version="t"),
         input=Files([outputs[1]]),
         output=Files([], clean=str(clean_path), repairs=str(repairs_path)),
         log=[str(tmp_path / "check.log")])
@@ -176,3 +176,55 @@ def test_workflow_scripts(tmp_path):
     assert provenance["kind"] == "inspection_clean" and provenance["config"] == config
     assert json.loads(repairs_path.read_text())["source"] == outputs[1]
     assert "repaired samples" in (tmp_path / "check.log").read_text()
+
+    # A file of the user's own car: read through the mapping the rule passes in params.
+    own = read_table(outputs[1]).rename(columns={"chainage_m": "KM", "gauge_mm": "GAUGE"})
+    own["KM"] /= 1000.0
+    user_file = tmp_path / "2023-03-15.csv"
+    own.to_csv(user_file, index=False, float_format="%.10g")
+    mapping = {"columns": {"KM": "chainage_m", "GAUGE": "gauge_mm"}, "units": {"chainage": "km"}}
+    mapped_path = tmp_path / "mapped.parquet"
+    fake = types.SimpleNamespace(
+        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping=mapping,
+                                                    version="t"),
+        input=Files([str(user_file)]),
+        output=Files([], clean=str(mapped_path), repairs=str(tmp_path / "mapped.json")),
+        log=[str(tmp_path / "mapped.log")])
+    runpy.run_path(str(scripts / "check_inspection.py"), init_globals={"snakemake": fake})
+    doc = json.loads((tmp_path / "mapped.json").read_text())
+    assert doc["renamed_columns"] == {"KM": "chainage_m", "GAUGE": "gauge_mm"}
+    assert doc["unit_conversions"] == {"chainage_m": {"unit": "km", "factor": 1000.0}}
+    pd.testing.assert_frame_equal(read_table(mapped_path), read_table(clean_path),
+                                  check_exact=False, rtol=0, atol=1e-9)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case, scale", [("case3", "small"), ("case3", "medium"),
+                                         ("case4", "small"), ("case4", "full")])
+def test_paper_case_campaigns_pass_every_check(case, scale):
+    """The synthetic campaigns of the paper cases (config/case*.yaml merged over config.yaml, as
+    --configfile does) pass the cleaning with the case's own settings. (Case 3 at full size,
+    36 x 85 km, takes a minute and is checked the same way outside the test suite; cases 1-2 use
+    the default study's series, covered above.)"""
+    from pathlib import Path
+
+    import yaml
+
+    from ttbpipe.inspection import options_from_config
+    from ttbpipe.study.cases import _merge, apply_scale
+
+    root = Path(__file__).resolve().parents[1]
+    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
+    _merge(cfg, yaml.safe_load((root / "config" / f"{case}.yaml").read_text()))
+    cfg["scale"] = scale
+    apply_scale(cfg)
+    syn = cfg["inspections"]["synthetic"]
+    cleaning = options_from_config({"cleaning": cfg["inspections"].get("cleaning")})
+    dates = campaign_dates(syn["start_date"], syn["campaigns"], syn["interval_months"])
+    n = 0
+    for campaign in synthetic_campaign_series(dates, spectrum=syn["spectrum"],
+                                              length_km=syn["length_km"], seed=syn["seed"]):
+        _, report = clean_campaign(campaign.table, f"{campaign.date}.parquet", **cleaning)
+        assert len(report.band_rms_mm) == 6
+        n += 1
+    assert n == syn["campaigns"]

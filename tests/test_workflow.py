@@ -133,3 +133,31 @@ def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
     src.write_bytes(data)
     dry = _snakemake(tmp_path, "--dry-run")
     assert "Nothing to be done" in dry.stdout + dry.stderr, (dry.stdout + dry.stderr)[-3000:]
+
+
+def test_unusable_campaign_files_stop_the_workflow_at_parse_time(tmp_path):
+    """Files meant as campaigns but named or placed otherwise are reported when Snakemake reads
+    the Snakefile (before any job), each with the name it should have; files that are not data
+    and the synthetic directory are not."""
+    _copy_repository(tmp_path)
+    (tmp_path / "small.yaml").write_text(SMALL_STUDY)
+    folder = tmp_path / "resources" / "inspections"
+    for name in ("20240414.csv", "2024/2024-05-15.csv", "README.md", "synthetic/2024-01-15.csv"):
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        (folder / name).write_text("chainage_m\n0\n")
+    cmd = [sys.executable, "-m", "snakemake", "--cores", "1", "--configfile", "small.yaml",
+           "--dry-run"]
+    result = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True)
+    text = result.stdout + result.stderr
+    assert result.returncode != 0, text[-3000:]
+    assert "2 inspection file(s) the workflow cannot use" in text, text[-3000:]
+    assert "resources/inspections/20240414.csv: compact date (YYYYMMDD); rename it to " \
+           "2024-04-14.csv" in text
+    assert "resources/inspections/2024/2024-05-15.csv: in a subfolder (2024/)" in text
+    assert "README.md" not in text and "synthetic/2024-01-15.csv" not in text
+    # renamed and moved as told, the same folder parses and plans the jobs for both campaigns
+    (folder / "20240414.csv").rename(folder / "2024-04-14.csv")
+    (folder / "2024" / "2024-05-15.csv").rename(folder / "2024-05-15.csv")
+    dry = _snakemake(tmp_path, "--dry-run")
+    dates = set(re.findall(r"date=(\d{4}-\d{2}-\d{2})", dry.stdout + dry.stderr))
+    assert {"2024-04-14", "2024-05-15"} <= dates

@@ -52,8 +52,9 @@ def report_caption_path(path: str) -> str:
     return path if os.path.isabs(path) else os.path.join("..", "..", path)
 
 
-DATE_PATTERN = r"\d{4}-\d{2}-\d{2}"
-CAMPAIGN_FILE = re.compile(rf"^({DATE_PATTERN})\.(csv|parquet)$")
+# The campaign date and the folder scan live in the package (ttbpipe.inspection).
+from ttbpipe.inspection.discover import discover_campaigns as _discover_campaign_files
+from ttbpipe.inspection.format import DATE_PATTERN
 
 wildcard_constraints:
     date=DATE_PATTERN,
@@ -92,21 +93,14 @@ def synthetic_dates() -> list[str]:
 
 def discover_campaigns() -> dict[str, str]:
     """Map campaign date -> file, from the user folder and the synthetic series."""
-    campaigns: dict[str, str] = {}
     folder = Path(config["inspections"]["directory"])
-    if folder.is_dir():
-        for path in sorted(folder.iterdir()):
-            match = CAMPAIGN_FILE.match(path.name)
-            if not match:
-                continue
-            date = match.group(1)
-            if date in campaigns:
-                raise WorkflowError(
-                    f"two inspection files for campaign {date}: {campaigns[date]} and {path}; "
-                    "keep one of them"
-                )
-            campaigns[date] = str(path)
     syn = config["inspections"].get("synthetic", {})
+    exclude = [syn["directory"]] if "directory" in syn else []
+    try:  # every unusable file (bad name, subfolder, two files for one date) in one error
+        found = _discover_campaign_files(folder, exclude=exclude)
+    except ValueError as exc:
+        raise WorkflowError(str(exc)) from None
+    campaigns = {date.isoformat(): str(path) for date, path in found.items()}
     for date in synthetic_dates():
         path = str(Path(syn["directory"]) / f"{date}.parquet")
         if date in campaigns:

@@ -19,6 +19,15 @@ rule synth_inspections:
         "../scripts/synth_inspections.py"
 
 
+def inspection_mapping(wildcards) -> dict:
+    """inspections.columns / inspections.units for a file of yours; none for a synthetic campaign
+    (written in ttbpipe's own names and units). A params entry, so a changed mapping reruns."""
+    if wildcards.date in synthetic_dates():
+        return {}
+    section = config["inspections"]
+    return {key: dict(section[key]) for key in ("columns", "units") if section.get(key)}
+
+
 rule check_inspection:
     """Validate one campaign file and apply the documented repairs."""
     input:
@@ -28,6 +37,7 @@ rule check_inspection:
         repairs=results_path("inspections/clean/{date}.repairs.json"),
     params:
         cleaning=config["inspections"].get("cleaning", {}),
+        mapping=inspection_mapping,
         version=MODEL_VERSION,
     log:
         log_path("inspections/check/{date}.log"),

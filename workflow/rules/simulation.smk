@@ -38,7 +38,7 @@ STUDY_KIND = {label: kind for kind, labels in STUDY_LABELS.items() for label in 
 def _campaign_sections(date: str) -> int:
     synthetic = config["inspections"].get("synthetic", {}) if date in synthetic_dates() else None
     return _study_plan.campaign_sections(CAMPAIGNS[date], config["psd"]["section_length_m"],
-                                         synthetic)
+                                         synthetic, inspection_mapping(type("W", (), {"date": date})))
 
 
 try:

@@ -13,7 +13,9 @@ setup_logging(snakemake.log[0])
 log = logging.getLogger("check_inspection")
 source = snakemake.input[0]
 try:
-    clean, report = check_campaign(source, **snakemake.params.cleaning)
+    # mapping: inspections.columns / inspections.units for the user's files ({} when synthetic)
+    clean, report = check_campaign(source, **snakemake.params.mapping,
+                                   **snakemake.params.cleaning)
 except InspectionError as exc:
     log.error("%s", exc)
     raise

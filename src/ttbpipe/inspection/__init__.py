@@ -2,22 +2,28 @@
 
 Public API::
 
-    read_campaign(path) -> DataFrame                       # format.py
+    read_campaign(path, columns=..., units=...) -> DataFrame           # format.py
     clean_campaign(df, source, **options) -> (clean, CleaningReport)   # validate.py
-    check_campaign(path, **options) -> (clean, CleaningReport)
+    check_campaign(path, columns=..., units=..., **options) -> (clean, CleaningReport)
+    options_from_config(config["inspections"]) -> check_campaign keyword arguments
+    discover_campaigns(folder, exclude=...) -> {date: path}            # discover.py
     write_synthetic_campaigns(out_dir, dates=..., ...) -> list[Path]   # synthetic.py
 
 Errors are :class:`InspectionError` (a ``ValueError``) naming the file, row and column.
 The synthetic module is imported lazily, since it depends on the irregularity stage.
 """
 
-from .format import (CHAINAGE_COLUMN, REQUIRED_COLUMNS, InspectionError, campaign_date,
-                     read_campaign)
-from .validate import REPAIR_KINDS, CleaningReport, check_campaign, clean_campaign
+from .discover import CampaignFolderError, discover_campaigns
+from .format import (CHAINAGE_COLUMN, DATE_PATTERN, REQUIRED_COLUMNS, InspectionError,
+                     apply_mapping, campaign_date, read_campaign)
+from .validate import (CLEANING_DEFAULTS, REPAIR_KINDS, CleaningReport, check_campaign,
+                       clean_campaign, options_from_config)
 
-__all__ = ["CHAINAGE_COLUMN", "REQUIRED_COLUMNS", "REPAIR_KINDS", "InspectionError",
-           "CleaningReport", "campaign_date", "read_campaign", "clean_campaign", "check_campaign",
-           "write_synthetic_campaigns", "campaign_dates"]
+__all__ = ["CHAINAGE_COLUMN", "DATE_PATTERN", "REQUIRED_COLUMNS", "REPAIR_KINDS",
+           "CLEANING_DEFAULTS", "InspectionError", "CampaignFolderError", "CleaningReport",
+           "campaign_date", "read_campaign", "apply_mapping", "clean_campaign", "check_campaign",
+           "options_from_config", "discover_campaigns", "write_synthetic_campaigns",
+           "campaign_dates"]
 
 
 def __getattr__(name: str):

@@ -61,13 +61,14 @@ from scipy.ndimage import uniform_filter1d
 from ..channels import INSPECTION_COLUMNS, SPECTRAL_CHANNELS, rails_from_spectral
 from ..io import atomic_path, write_table
 from .format import CHAINAGE_COLUMN
+from .validate import CLEANING_DEFAULTS
 
 logger = logging.getLogger(__name__)
 
 _DAYS_PER_MONTH = 365.25 / 12.0
 _STREAM_LAYOUT, _STREAM_CAMPAIGN = 0, 1
 # The default of clean_campaign(plausible_limit_mm=...); FRA classes 1-5 exceed it (long waves).
-_DEFAULT_PLAUSIBLE_LIMIT_MM = 60.0
+_DEFAULT_PLAUSIBLE_LIMIT_MM = CLEANING_DEFAULTS["plausible_limit_mm"]
 
 
 @dataclasses.dataclass(frozen=True)

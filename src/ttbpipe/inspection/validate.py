@@ -3,15 +3,24 @@
 :func:`clean_campaign` checks a campaign table read by
 :func:`ttbpipe.inspection.format.read_campaign` and applies the documented repairs, in this order:
 
+0. **Mapping** (optional, config ``inspections.columns`` / ``inspections.units``): the file's
+   columns renamed to ttbpipe's names and declared units converted
+   (:func:`ttbpipe.inspection.format.apply_mapping`; logged, listed in the report as
+   ``renamed_columns`` and ``unit_conversions``). Errors then name the file's own column.
 1. **Schema.** Required columns present (a column written with another length unit, e.g.
    ``vertical_left_m``, is an error that names the expected unit); text in a number column is an
    error naming the first offending row and column. Extra columns are ignored and logged.
-2. **Units.** Implausible magnitudes: a channel whose values are all tiny (99th percentile of
-   ``|x|`` below 0.05 with a standard deviation below 0.01) is in metres, one whose median ``|x|``
-   exceeds ``plausible_limit_mm`` is in micrometres (or holds the absolute gauge); a chainage step
-   below 1 cm or above 10 m is in the wrong unit.
-3. **Chainage.** No missing value, strictly increasing (a duplicate or a step back is an error
-   naming the row).
+2. **Chainage.** No missing value, strictly increasing (a duplicate or a step back is an error
+   naming the row); a median step below 1 cm or above 10 m is in the wrong unit, and a step that
+   is a round metric step (:data:`COMMON_STEPS_M`) written in feet is chainage in feet.
+3. **Sensor faults.** A channel that reads exactly 0 everywhere is a dead sensor, one with zero
+   variance a stuck sensor; so is a run of exactly equal samples longer than
+   ``max_constant_run_m`` (no real geometry is constant over metres at the resolution of an
+   inspection car; a run of zeros: a dead sensor or missing values written as 0). Errors name
+   the first row of the run.
+   **Units.** A channel whose values are all tiny (99th percentile of ``|x|`` below 0.05 with a
+   standard deviation below 0.01) is in metres, one whose median ``|x|`` exceeds
+   ``plausible_limit_mm`` is in micrometres (or holds the absolute gauge).
 4. **Sampling.** Every step must lie within ``max_jitter`` (25 %) of a whole multiple of the
    median step, else it is a jump (an error naming the row). The grid step is fitted to the file
    (least squares on the grid indices) and the grid origin is the median offset of the samples.
@@ -26,7 +35,10 @@
    ``4 * max_spike_run`` neighbours is flagged; runs of at most ``max_spike_run`` flagged samples
    are replaced by linear interpolation (``spike_replaced``). Longer runs are real geometry or a
    sensor fault: they are kept and logged as a warning.
-7. **Plausibility.** Any ``|value| > plausible_limit_mm`` after the repairs is an error.
+7. **Plausibility.** Any ``|value| > plausible_limit_mm`` after the repairs is an error. The
+   band RMS of each channel over 2-200 m must lie within the range of the standard spectra from
+   the best to the worst track class, widened by ``band_rms_margin``
+   (:mod:`ttbpipe.inspection.plausibility`): below it the values are in centimetres or inches.
 8. **Detrending** per channel (``none`` | ``constant`` | ``linear``, scipy.signal.detrend), with
    the removed mean and slope logged and reported.
 
@@ -43,18 +55,19 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import re
 import warnings
 from pathlib import Path
-from typing import Any
+from types import MappingProxyType
+from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
 import scipy.signal
 
 from ..channels import INSPECTION_COLUMNS
-from .format import (CHAINAGE_COLUMN, REQUIRED_COLUMNS, InspectionError, campaign_date,
-                     unit_error_message)
+from .format import (CHAINAGE_COLUMN, CHAINAGE_UNITS_TO_M, REQUIRED_COLUMNS, InspectionError,
+                     apply_mapping, campaign_date, numeric_column, unit_error_message)
+from .plausibility import check_band_rms
 
 logger = logging.getLogger(__name__)
 
@@ -66,6 +79,37 @@ DETREND_KINDS: tuple[str, ...] = ("none", "constant", "linear")
 
 #: Plausible sampling steps (m); outside this range the chainage is in another unit.
 MIN_STEP_M, MAX_STEP_M = 0.01, 10.0
+
+#: Round metric sampling steps (m) of inspection cars (0.25 m is the usual one). A chainage whose
+#: step is none of them but becomes one times 0.3048 (m per foot) is written in feet.
+COMMON_STEPS_M: tuple[float, ...] = (0.1, 0.125, 0.2, 0.25, 0.5, 1.0)
+
+#: Relative tolerance of the comparison with :data:`COMMON_STEPS_M` (the step is measured over
+#: the whole file, so rounding of the chainage values hardly affects it).
+COMMON_STEP_TOLERANCE = 1e-4
+
+#: Defaults of the cleaning options, the keys of config section ``inspections.cleaning`` (plus
+#: ``sampling_tolerance`` and ``max_jitter``, function arguments only). The one home of these
+#: numbers: :func:`clean_campaign`, the ``check-inspection`` command line and the synthetic
+#: generator take them from here.
+#:
+#: ``band_rms_margin``: a factor of 3 on the RMS (9 on the PSD) below the best and above the worst
+#: standard spectrum keeps real track of any class (and the synthetic campaigns, with their
+#: noise, defects and maintenance) inside the range, while TB/T 3352 or German track in
+#: centimetres (10 times too small) or inches (25.4 times) falls outside it.
+#: ``max_constant_run_m``: 20 m is 80 samples at 0.25 m; real geometry measured to 0.01 mm never
+#: repeats one value that long, while a dropout written as constant values does.
+CLEANING_DEFAULTS: Mapping[str, Any] = MappingProxyType({
+    "max_gap_m": 2.0,
+    "spike_threshold_mm": 15.0,
+    "max_spike_run": 2,
+    "plausible_limit_mm": 60.0,
+    "detrend": "linear",
+    "sampling_tolerance": 0.01,
+    "max_jitter": 0.25,
+    "band_rms_margin": 3.0,
+    "max_constant_run_m": 20.0,
+})
 
 _NOMINAL_GAUGES_MM = (1000.0, 1067.0, 1435.0, 1520.0, 1668.0)
 
@@ -91,6 +135,10 @@ class CleaningReport:
     max_off_grid_m: float = 0.0
     long_excursions_kept: dict[str, int] = dataclasses.field(default_factory=dict)
     ignored_columns: list[str] = dataclasses.field(default_factory=list)
+    renamed_columns: dict[str, str] = dataclasses.field(default_factory=dict)
+    unit_conversions: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
+    band_rms_band_m: list[float] | None = None
+    band_rms_mm: dict[str, float] = dataclasses.field(default_factory=dict)
     detrend: str = "linear"
     trend_removed: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)
     cross_level_rms_difference_mm: float | None = None
@@ -150,6 +198,16 @@ class CleaningReport:
             lines.append(f"long excursions kept (not spikes): {self.long_excursions_kept}")
         if self.ignored_columns:
             lines.append(f"ignored extra columns: {', '.join(self.ignored_columns)}")
+        if self.renamed_columns:
+            lines.append("columns mapped (inspections.columns): " + ", ".join(
+                f"{k} -> {v}" for k, v in self.renamed_columns.items()))
+        if self.unit_conversions:
+            lines.append("units converted (inspections.units): " + ", ".join(
+                f"{k} from {v['unit']}" for k, v in self.unit_conversions.items()))
+        if self.band_rms_band_m:
+            lines.append(f"band RMS {self.band_rms_band_m[0]:g}-{self.band_rms_band_m[1]:g} m "
+                         "(mm): " + ", ".join(f"{k.removesuffix('_mm')} {v:.3g}"
+                                              for k, v in self.band_rms_mm.items()))
         if self.cross_level_rms_difference_mm is not None:
             lines.append("cross_level vs vertical_left - vertical_right: RMS difference "
                          f"{self.cross_level_rms_difference_mm:.3f} mm (information only)")
@@ -161,30 +219,6 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     padded = np.concatenate(([False], mask.astype(bool), [False]))
     edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
     return list(zip(edges[0::2].tolist(), edges[1::2].tolist()))
-
-
-_NA_TEXT = re.compile(r"^\s*(|nan|na|n/a|null|none|-nan|<na>)\s*$", re.IGNORECASE)
-
-
-def _numeric_column(series: pd.Series, source: str, column: str) -> np.ndarray:
-    """Column as float64; text that is not a number is an error naming its first row."""
-    if pd.api.types.is_bool_dtype(series.dtype):
-        raise InspectionError(source, None, column, "boolean column; expected numbers")
-    if pd.api.types.is_numeric_dtype(series.dtype):
-        return series.to_numpy(dtype=float, na_value=np.nan)
-    converted = pd.to_numeric(series, errors="coerce")
-    bad = converted.isna().to_numpy() & ~series.isna().to_numpy()
-    if bad.any():
-        texts = series.astype(str).to_numpy()
-        for i in np.flatnonzero(bad):
-            if _NA_TEXT.match(texts[i]):
-                continue  # a spelled-out missing value: handled as NaN
-            hint = ""
-            if re.fullmatch(r"\s*[-+]?\d+,\d+\s*", texts[i]):
-                hint = " (decimal comma? use a point)"
-            raise InspectionError(source, int(i) + 1, column,
-                                  f"text {texts[i]!r} in a number column{hint}")
-    return converted.to_numpy(dtype=float, na_value=np.nan)
 
 
 def _check_schema(df: pd.DataFrame, source: str) -> tuple[dict[str, np.ndarray], list[str]]:
@@ -201,7 +235,7 @@ def _check_schema(df: pd.DataFrame, source: str) -> tuple[dict[str, np.ndarray],
                               f"missing column {required!r} (found: {', '.join(columns)}); "
                               f"required: {', '.join(REQUIRED_COLUMNS)}")
     extra = [c for c in columns if c not in REQUIRED_COLUMNS]
-    values = {c: _numeric_column(df[c], source, c) for c in REQUIRED_COLUMNS}
+    values = {c: numeric_column(df[c], source, c) for c in REQUIRED_COLUMNS}
     for c, v in values.items():
         inf = np.isinf(v)
         if inf.any():
@@ -230,19 +264,27 @@ def _check_units(values: dict[str, np.ndarray], source: str, plausible_limit_mm:
                 source, None, col,
                 f"implausible magnitude: median |value| = {median_abs:.4g} mm exceeds "
                 f"plausible_limit_mm = {plausible_limit_mm:g} mm; the values seem to be in "
-                "micrometres (divide by 1000) or another unit; expected millimetres")
+                "micrometres (divide by 1000, or declare the unit in inspections.units) or "
+                "another unit; expected millimetres")
         if magnitude.max() > 0 and np.percentile(magnitude, 99) < 0.05 \
                 and float(np.std(finite)) < 0.01:
             raise InspectionError(
                 source, None, col,
                 f"implausible magnitude: all values tiny (99th percentile of |value| = "
                 f"{np.percentile(magnitude, 99):.3g}, standard deviation "
-                f"{np.std(finite):.3g}); the values seem to be in metres (multiply by 1000); "
-                "expected millimetres")
+                f"{np.std(finite):.3g}); the values seem to be in metres (multiply by 1000, or "
+                "declare the unit in inspections.units); expected millimetres")
 
 
-def _check_chainage(chainage: np.ndarray, source: str) -> None:
-    """No missing chainage; strictly increasing; a plausible step."""
+def _is_common_step(step: float) -> bool:
+    return any(abs(step - s) <= COMMON_STEP_TOLERANCE * s for s in COMMON_STEPS_M)
+
+
+def _check_chainage(chainage: np.ndarray, source: str) -> float:
+    """No missing chainage; strictly increasing; a plausible step, not in feet.
+
+    Returns the median step (m).
+    """
     missing = ~np.isfinite(chainage)
     if missing.any():
         raise InspectionError(source, int(np.flatnonzero(missing)[0]) + 1, CHAINAGE_COLUMN,
@@ -262,7 +304,61 @@ def _check_chainage(chainage: np.ndarray, source: str) -> None:
         raise InspectionError(source, None, CHAINAGE_COLUMN,
                               f"implausible median sampling step {step:.6g} m (expected "
                               f"{MIN_STEP_M:g}..{MAX_STEP_M:g} m, typically 0.25 m): is the "
-                              "chainage in metres?")
+                              "chainage in metres? (convert it, or declare its unit in "
+                              "inspections.units, e.g. chainage: km)")
+    # The step over the whole file (not one rounded step): a chainage rounded to 1 mm in feet
+    # still gives the step to about 1e-7 relative.
+    n_steps = float(np.sum(np.rint(steps / step)))
+    mean_step = float(chainage[-1] - chainage[0]) / n_steps
+    foot = CHAINAGE_UNITS_TO_M["ft"]
+    if not _is_common_step(mean_step) and _is_common_step(mean_step * foot):
+        common = ", ".join(f"{s:g}" for s in COMMON_STEPS_M)
+        raise InspectionError(
+            source, None, CHAINAGE_COLUMN,
+            f"chainage looks like feet: the sampling step {mean_step:.6g} is "
+            f"{mean_step * foot:.6g} m in feet, a common metric step ({common} m), but no "
+            f"common step itself; convert the chainage to metres (multiply by {foot:g}) or "
+            "declare inspections.units: {chainage: ft}")
+    return step
+
+
+def _check_sensor_faults(values: dict[str, np.ndarray], source: str, step: float,
+                         max_constant_run_m: float) -> None:
+    """Dead (all zero) and stuck (constant) channels, and long runs of one exact value."""
+    for col in INSPECTION_COLUMNS:
+        v = values[col]
+        finite_rows = np.flatnonzero(np.isfinite(v))
+        if finite_rows.size == 0:
+            continue  # all missing: the NaN-run check names it
+        finite = v[finite_rows]
+        first = int(finite_rows[0]) + 1
+        if np.all(finite == 0.0):
+            raise InspectionError(
+                source, first, col,
+                f"dead sensor: all {finite.size} values are exactly 0 (no signal); check the "
+                "sensor and the export of this channel")
+        if np.all(finite == finite[0]):
+            raise InspectionError(
+                source, first, col,
+                f"stuck sensor: all {finite.size} values are exactly {finite[0]:g} mm (zero "
+                "variance); no real track geometry is constant")
+        same = v[1:] == v[:-1]  # NaN never equals: a missing value ends a run
+        for start, stop in _runs(same):
+            n_samples = stop - start + 1
+            if n_samples * step <= max_constant_run_m + 1e-9 * step:
+                continue
+            value = float(v[start])
+            extent = (f"{n_samples} consecutive samples (rows {start + 1}-{stop + 1}, "
+                      f"{n_samples * step:g} m) read exactly {value:g} mm, longer than "
+                      f"max_constant_run_m = {max_constant_run_m:g} m")
+            if value == 0.0:
+                reason = (f"dead sensor: {extent} (or missing values written as 0 instead of "
+                          "empty cells)")
+            else:
+                reason = (f"stuck sensor: {extent}; no real track geometry is constant that "
+                          "long (raise inspections.cleaning.max_constant_run_m only for a "
+                          "coarse measuring resolution)")
+            raise InspectionError(source, start + 1, col, reason)
 
 
 @dataclasses.dataclass
@@ -397,12 +493,25 @@ def _local_median_of_neighbours(values: np.ndarray, half_width: int) -> np.ndarr
         return np.nanmedian(neighbours, axis=1)
 
 
-def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2.0,
-                   spike_threshold_mm: float = 15.0, max_spike_run: int = 2,
-                   plausible_limit_mm: float = 60.0, detrend: str = "linear",
-                   sampling_tolerance: float = 0.01,
-                   max_jitter: float = 0.25) -> tuple[pd.DataFrame, CleaningReport]:
+_D = CLEANING_DEFAULTS
+
+
+def clean_campaign(df: pd.DataFrame, source: str | Path, *,
+                   max_gap_m: float = _D["max_gap_m"],
+                   spike_threshold_mm: float = _D["spike_threshold_mm"],
+                   max_spike_run: int = _D["max_spike_run"],
+                   plausible_limit_mm: float = _D["plausible_limit_mm"],
+                   detrend: str = _D["detrend"],
+                   sampling_tolerance: float = _D["sampling_tolerance"],
+                   max_jitter: float = _D["max_jitter"],
+                   band_rms_margin: float = _D["band_rms_margin"],
+                   max_constant_run_m: float = _D["max_constant_run_m"],
+                   columns: Mapping[str, str] | None = None,
+                   units: Mapping[str, str] | None = None
+                   ) -> tuple[pd.DataFrame, CleaningReport]:
     """Validate one campaign and apply the documented repairs (see the module docstring).
+
+    Defaults: :data:`CLEANING_DEFAULTS`.
 
     Parameters
     ----------
@@ -424,6 +533,16 @@ def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2
     sampling_tolerance, max_jitter
         Chainage deviations from the uniform grid up to ``sampling_tolerance`` steps are ignored,
         up to ``max_jitter`` steps re-gridded by interpolation, larger ones are errors.
+    band_rms_margin
+        Factor (>= 1) on the band RMS below the best and above the worst standard spectrum
+        within which a channel is plausible (:mod:`ttbpipe.inspection.plausibility`).
+    max_constant_run_m
+        Longest run of exactly equal samples (``n_samples * step``) accepted; longer: a stuck or
+        dead sensor.
+    columns, units
+        Column and unit mapping of the file (config ``inspections.columns`` and
+        ``inspections.units``, :func:`ttbpipe.inspection.format.apply_mapping`), for a table
+        that :func:`read_campaign` did not map already.
 
     Returns
     -------
@@ -437,6 +556,39 @@ def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2
         naming the file, the first offending row and the column.
     """
     source = str(source)
+    if columns or units:
+        df = apply_mapping(df, source, columns=columns, units=units)
+    renamed = dict(df.attrs.get("renamed_columns") or {})
+    conversions = dict(df.attrs.get("unit_conversions") or {})
+    try:
+        return _clean_campaign(df, source, renamed, conversions, max_gap_m=max_gap_m,
+                               spike_threshold_mm=spike_threshold_mm,
+                               max_spike_run=max_spike_run,
+                               plausible_limit_mm=plausible_limit_mm, detrend=detrend,
+                               sampling_tolerance=sampling_tolerance, max_jitter=max_jitter,
+                               band_rms_margin=band_rms_margin,
+                               max_constant_run_m=max_constant_run_m)
+    except InspectionError as exc:
+        original = {target: name for name, target in renamed.items()}
+        if exc.column not in original and exc.column not in conversions:
+            raise
+        # Name the file's own column, and say the values were converted.
+        column = (f"{original[exc.column]} (read as {exc.column})" if exc.column in original
+                  else exc.column)
+        reason = exc.reason
+        if exc.column in conversions:
+            reason += (f" [values converted from {conversions[exc.column]['unit']} by "
+                       "inspections.units]")
+        raise InspectionError(exc.file, exc.row, column, reason) from None
+
+
+def _clean_campaign(df: pd.DataFrame, source: str, renamed: dict[str, str],
+                    conversions: dict[str, dict[str, Any]], *, max_gap_m: float,
+                    spike_threshold_mm: float, max_spike_run: int, plausible_limit_mm: float,
+                    detrend: str, sampling_tolerance: float, max_jitter: float,
+                    band_rms_margin: float, max_constant_run_m: float
+                    ) -> tuple[pd.DataFrame, CleaningReport]:
+    """:func:`clean_campaign` after the mapping (its errors name ttbpipe's columns)."""
     if detrend not in DETREND_KINDS:
         raise ValueError(f"detrend must be one of {DETREND_KINDS}, not {detrend!r}")
     if max_spike_run < 1 or spike_threshold_mm <= 0 or plausible_limit_mm <= 0 or max_gap_m < 0:
@@ -444,6 +596,9 @@ def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2
                          "plausible_limit_mm > 0, max_gap_m >= 0")
     if not 0 <= sampling_tolerance <= max_jitter < 0.5:
         raise ValueError("need 0 <= sampling_tolerance <= max_jitter < 0.5")
+    if not band_rms_margin >= 1.0 or not max_constant_run_m > 0:
+        raise ValueError("cleaning options: need band_rms_margin >= 1 and "
+                         "max_constant_run_m > 0")
     date = df.attrs.get("campaign_date")
     if date is None:
         try:
@@ -456,7 +611,16 @@ def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2
                                           max_spike_run=max_spike_run,
                                           plausible_limit_mm=plausible_limit_mm, detrend=detrend,
                                           sampling_tolerance=sampling_tolerance,
-                                          max_jitter=max_jitter))
+                                          max_jitter=max_jitter,
+                                          band_rms_margin=band_rms_margin,
+                                          max_constant_run_m=max_constant_run_m))
+    for name, target in renamed.items():
+        report.renamed_columns[name] = target
+        report.notes.append(f"column {name!r} read as {target!r} (inspections.columns)")
+    for column, conversion in conversions.items():
+        report.unit_conversions[column] = dict(conversion)
+        report.notes.append(f"{column} converted from {conversion['unit']} "
+                            f"(x {conversion['factor']:g}, inspections.units)")
     if df.attrs.get("trailing_blank_rows_removed"):
         report.note(f"{df.attrs['trailing_blank_rows_removed']} blank row(s) at the end of the "
                     "file removed")
@@ -470,11 +634,13 @@ def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2
         report.note(f"extra columns ignored (not in the cleaned table): {', '.join(extra)}")
     if len(df) < 3:
         raise InspectionError(source, None, None, f"only {len(df)} data row(s); need at least 3")
+    # 2-3. Chainage, sensor faults, units.
+    chainage = values[CHAINAGE_COLUMN]
+    median_step = _check_chainage(chainage, source)
+    _check_sensor_faults(values, source, median_step, max_constant_run_m)
     _check_units(values, source, plausible_limit_mm)
 
-    # 3-4. Chainage and sampling.
-    chainage = values[CHAINAGE_COLUMN]
-    _check_chainage(chainage, source)
+    # 4. Sampling.
     data = np.column_stack([values[c] for c in INSPECTION_COLUMNS])
     grid = _regrid(chainage, data, source, report, max_gap_m, sampling_tolerance, max_jitter)
     step = grid.step
@@ -546,6 +712,14 @@ def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2
             source, row, INSPECTION_COLUMNS[c],
             f"value {repaired[i, c]:.4g} mm{where} exceeds plausible_limit_mm = "
             f"{plausible_limit_mm:g} mm after the repairs (wrong unit or a sensor fault)")
+    band, band_rms = check_band_rms(
+        {col: repaired[:, c] for c, col in enumerate(INSPECTION_COLUMNS)}, step, source,
+        margin=band_rms_margin)
+    report.band_rms_band_m = list(band) if band else None
+    report.band_rms_mm = band_rms
+    if band:
+        logger.info("%s: band RMS over %g-%g m (mm): %s, within the standard spectra's range",
+                    source, band[0], band[1], {k: round(v, 3) for k, v in band_rms.items()})
 
     # Information: cross-level against the difference of the rail profiles (not enforced).
     columns = {col: repaired[:, c] for c, col in enumerate(INSPECTION_COLUMNS)}
@@ -583,8 +757,27 @@ def clean_campaign(df: pd.DataFrame, source: str | Path, *, max_gap_m: float = 2
     return clean, report
 
 
-def check_campaign(path: str | Path, **options: Any) -> tuple[pd.DataFrame, CleaningReport]:
-    """Read and clean one campaign file: :func:`read_campaign` then :func:`clean_campaign`."""
+def check_campaign(path: str | Path, *, columns: Mapping[str, str] | None = None,
+                   units: Mapping[str, str] | None = None,
+                   **options: Any) -> tuple[pd.DataFrame, CleaningReport]:
+    """Read and clean one campaign file: :func:`read_campaign` then :func:`clean_campaign`.
+
+    ``columns`` / ``units``: the file's column and unit mapping (applied when reading);
+    ``options``: the cleaning options of :func:`clean_campaign`.
+    """
     from .format import read_campaign
-    frame = read_campaign(path)
+    frame = read_campaign(path, columns=columns, units=units)
     return clean_campaign(frame, path, **options)
+
+
+def options_from_config(inspections: Mapping[str, Any] | None) -> dict[str, Any]:
+    """Keyword arguments of :func:`check_campaign` from a configuration's ``inspections`` section.
+
+    The ``cleaning`` options, and ``columns`` / ``units`` when the section has a mapping.
+    """
+    section = dict(inspections or {})
+    options: dict[str, Any] = dict(section.get("cleaning") or {})
+    for key in ("columns", "units"):
+        if section.get(key):
+            options[key] = dict(section[key])
+    return options

@@ -6,8 +6,8 @@
 
 FILE is a cleaned campaign Parquet (written by ``check-inspection`` / the ``check_inspection``
 rule) or a raw campaign CSV/Parquet, which is read and cleaned first with
-:func:`ttbpipe.inspection.read_campaign` and :func:`ttbpipe.inspection.clean_campaign` (options
-from the ``inspections.cleaning`` section of ``--config``, else that function's defaults).
+:func:`ttbpipe.inspection.check_campaign` (cleaning options and the column/unit mapping from the
+``inspections`` section of ``--config``, else the package defaults).
 ``--input-kind auto`` treats CSV files as raw and Parquet files as cleaned when their ttbpipe
 provenance ``kind`` contains "clean", raw otherwise.
 
@@ -44,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--band-m", type=float, nargs=2, metavar=("MIN", "MAX"), default=None,
                         help="keep wavelengths MIN..MAX m (default 2 200)")
     parser.add_argument("--config", type=Path, default=None,
-                        help="study config YAML: psd and inspections.cleaning sections")
+                        help="study config YAML: psd and inspections (cleaning, columns, units) sections")
     parser.add_argument("--input-kind", choices=("auto", "clean", "raw"), default="auto",
                         help="whether FILE is already cleaned (default: auto-detect)")
 
@@ -93,10 +93,10 @@ def run(args: argparse.Namespace) -> int:
             clean = read_table(path)
             log.info("%s: cleaned campaign, %d rows", path, len(clean))
         else:
-            from ..inspection import clean_campaign, read_campaign
+            from ..inspection import check_campaign, options_from_config
 
-            cleaning = dict((config.get("inspections") or {}).get("cleaning") or {})
-            clean, report = clean_campaign(read_campaign(path), source=path, **cleaning)
+            # cleaning options and the column/unit mapping of the inspections section
+            clean, report = check_campaign(path, **options_from_config(config.get("inspections")))
             log.info("%s: raw campaign cleaned first: %s", path, report.summary())
         table = estimate_campaign_psd(clean, psd_options, source=str(path))
     except ValueError as exc:  # includes InspectionError; name the file if the message does not

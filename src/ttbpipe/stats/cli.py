@@ -17,9 +17,11 @@ import logging
 import re
 from pathlib import Path
 
+from ..inspection.format import DATE_PATTERN
+
 log = logging.getLogger(__name__)
 
-_DATE = re.compile(r"^\d{4}-\d{2}-\d{2}$")
+_DATE = re.compile(rf"^{DATE_PATTERN}$")  # a dated (campaign) scenario
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

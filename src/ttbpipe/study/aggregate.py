@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from .. import io
+from ..inspection.format import DATE_PATTERN
 from ..stats import aggregate as stats_aggregate
 from ..stats import plots
 from ..stats.limits import limits_from_config
@@ -41,7 +42,7 @@ from ..stats.schema import RESPONSE_INDICES
 
 log = logging.getLogger(__name__)
 
-_DATE = re.compile(r"^\d{4}-\d{2}-\d{2}$")
+_DATE = re.compile(rf"^{DATE_PATTERN}$")  # a dated (campaign) scenario
 #: Indices of the paper's Fig. 17 (long-term behaviour), when present.
 ENVELOPE_COLUMNS = ("max_deck_vertical_acc_m_s2", "max_deck_lateral_acc_m_s2",
                     "max_carbody_lateral_acc_m_s2", "max_wheel_vertical_force_N",

@@ -52,11 +52,12 @@ FIELD_KINDS = ("fields", "fields_mc")
 
 
 @functools.lru_cache(maxsize=4096)
-def _campaign_rows_cached(path: str, size: int, mtime_ns: int) -> tuple[int, float]:
+def _campaign_rows_cached(path: str, size: int, mtime_ns: int, mapping_json: str
+                          ) -> tuple[int, float]:
     from ..inspection.format import CHAINAGE_COLUMN, InspectionError, read_campaign
     from ..inspection.validate import grid_indices
 
-    frame = read_campaign(path, check_name=False)
+    frame = read_campaign(path, check_name=False, **json.loads(mapping_json))
     if CHAINAGE_COLUMN not in frame.columns:
         raise InspectionError(path, None, CHAINAGE_COLUMN, "missing chainage column")
     chainage = pd.to_numeric(frame[CHAINAGE_COLUMN], errors="coerce").to_numpy(float)
@@ -67,10 +68,14 @@ def _campaign_rows_cached(path: str, size: int, mtime_ns: int) -> tuple[int, flo
     return int(k[-1]) + 1, float(step)
 
 
-def campaign_rows(path: str | os.PathLike[str]) -> tuple[int, float]:
-    """(rows of the cleaned campaign, sampling step in m) from the file's chainage alone."""
+def campaign_rows(path: str | os.PathLike[str], mapping: Mapping[str, Any] | None = None
+                  ) -> tuple[int, float]:
+    """(rows of the cleaned campaign, sampling step in m) from the file's chainage alone, read
+    through the file's column and unit ``mapping`` (``columns``/``units`` of
+    ``inspections``; none for synthetic campaigns)."""
     stat = Path(path).stat()
-    return _campaign_rows_cached(str(path), stat.st_size, stat.st_mtime_ns)
+    return _campaign_rows_cached(str(path), stat.st_size, stat.st_mtime_ns,
+                                 json.dumps(dict(mapping or {}), sort_keys=True))
 
 
 @functools.lru_cache(maxsize=16)
@@ -90,11 +95,12 @@ def full_sections(rows: int, step_m: float, section_length_m: float) -> int:
 
 
 def campaign_sections(path: str | os.PathLike[str], section_length_m: float,
-                      synthetic: Mapping[str, Any] | None = None) -> int:
-    """Full sections of one campaign: from its file, or, for a synthetic campaign that has not
-    been written yet, from the generator's grid."""
+                      synthetic: Mapping[str, Any] | None = None,
+                      mapping: Mapping[str, Any] | None = None) -> int:
+    """Full sections of one campaign: from its file (read through ``mapping``), or, for a
+    synthetic campaign that has not been written yet, from the generator's grid."""
     if Path(path).is_file():
-        rows, step = campaign_rows(path)
+        rows, step = campaign_rows(path, mapping)
     elif synthetic is not None:
         rows, step = synthetic_rows(str(synthetic.get("spectrum", "tbt3352")),
                                     float(synthetic.get("length_km", 5.0)))
