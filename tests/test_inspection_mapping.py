@@ -191,8 +191,8 @@ def test_cli_mapping_options_and_config(original, tmp_path, capsys):
 
 
 def test_schema_lists_are_the_packages():
-    """config.schema.yaml repeats the package's unit and column names: they must agree."""
-    schema = yaml.safe_load((REPO / "workflow/schemas/config.schema.yaml").read_text())
+    """study.schema.yaml repeats the package's unit and column names: they must agree."""
+    schema = yaml.safe_load((REPO / "src/ttbpipe/schemas/study.schema.yaml").read_text())
     section = schema["properties"]["inspections"]["properties"]
     assert section["columns"]["additionalProperties"]["enum"] == list(REQUIRED_COLUMNS)
     units = section["units"]["properties"]
@@ -206,18 +206,17 @@ def test_schema_lists_are_the_packages():
 
 
 def test_config_with_a_mapping_validates():
-    import jsonschema
+    from ttbpipe.configuration import ConfigurationError, validate_study_config
 
-    schema = yaml.safe_load((REPO / "workflow/schemas/config.schema.yaml").read_text())
     config = yaml.safe_load((REPO / "config/config.yaml").read_text())
     assert config["inspections"]["columns"] == {} and config["inspections"]["units"] == {}
     config["inspections"]["columns"] = dict(OWN_NAMES)
     config["inspections"]["units"] = dict(UNITS)
     config["inspections"]["cleaning"]["band_rms_margin"] = 4.0
-    jsonschema.validate(config, schema)
+    validate_study_config(config, "config.yaml")
     config["inspections"]["units"] = {"channels": "furlong"}
-    with pytest.raises(jsonschema.ValidationError):
-        jsonschema.validate(config, schema)
+    with pytest.raises(ConfigurationError):
+        validate_study_config(config, "config.yaml")
 
 
 def test_documented_defaults_are_the_packages():
