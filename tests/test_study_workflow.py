@@ -58,6 +58,18 @@ def _incomplete(workdir: Path) -> set[str]:
     return out
 
 
+def _start(cmd: list[str], cwd: Path, env: dict) -> tuple[subprocess.Popen, list[str]]:
+    """Start Snakemake in its own process group; a thread collects its output lines."""
+    import threading
+
+    proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    output: list[str] = []
+    threading.Thread(target=lambda: output.extend(iter(proc.stdout.readline, "")),
+                     daemon=True).start()
+    return proc, output
+
+
 def _cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "snakemake", *args, "--cores", "2", "--configfile", "tiny.yaml"]
 
@@ -68,14 +80,15 @@ def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
     (tmp_path / "tiny.yaml").write_text(TINY_STUDY)
     env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
     root = tmp_path / "results" / "study" / "batches"   # <digest>/<scenario>/...
-    proc = subprocess.Popen(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not list(root.glob("*/C3/extremes_*.parquet")):
+    proc, output = _start(_cmd("results/study/extremes.parquet"), tmp_path, env)
+    deadline = time.monotonic() + 180
+    # interrupt once Snakemake has registered a finished batch (a batch whose files exist but
+    # whose job Snakemake has not seen end is, rightly, marked incomplete and redone)
+    while time.monotonic() < deadline and not re.search(
+            r"Finished jobid: \d+ \(Rule: simulate_batch\)", "".join(output)):
         if proc.poll() is not None:
-            pytest.fail("snakemake ended before the first batch:\n" + proc.stdout.read().decode()[-3000:])
-        time.sleep(0.2)
+            pytest.fail("snakemake ended before the first batch:\n" + "".join(output)[-3000:])
+        time.sleep(0.1)
     os.killpg(proc.pid, signal.SIGINT)
     proc.wait(timeout=60)
     batches = next(root.glob("*/C3"))

@@ -156,8 +156,15 @@ def test_unusable_campaign_files_stop_the_workflow_at_parse_time(tmp_path):
     assert "resources/inspections/2024/2024-05-15.csv: in a subfolder (2024/)" in text
     assert "README.md" not in text and "synthetic/2024-01-15.csv" not in text
     # renamed and moved as told, the same folder parses and plans the jobs for both campaigns
+    # (with campaign data in them: the plan reads each campaign's chainage when it starts)
+    from ttbpipe.inspection.synthetic import write_synthetic_campaigns
+
+    data = write_synthetic_campaigns(tmp_path / "generated", dates=["2024-04-14", "2024-05-15"],
+                                     length_km=2.0, fmt="csv")
     (folder / "20240414.csv").rename(folder / "2024-04-14.csv")
     (folder / "2024" / "2024-05-15.csv").rename(folder / "2024-05-15.csv")
+    for path in data:
+        shutil.copy(path, folder / path.name)
     dry = _snakemake(tmp_path, "--dry-run")
     dates = set(re.findall(r"date=(\d{4}-\d{2}-\d{2})", dry.stdout + dry.stderr))
     assert {"2024-04-14", "2024-05-15"} <= dates

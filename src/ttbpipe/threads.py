@@ -34,17 +34,16 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 @contextlib.contextmanager
 def single_threaded() -> Iterator[None]:
-    """Limit BLAS/OpenMP pools (threadpoolctl) and numba to :data:`SAMPLE_THREADS` inside."""
+    """Limit BLAS/OpenMP pools (threadpoolctl) to :data:`SAMPLE_THREADS` inside; numba's
+    parallel pool is set to one thread too (and left there: every ttbpipe kernel is a serial
+    ``@njit``, so this only keeps a parallel kernel from oversubscribing the cores; numba
+    refuses to raise the count again once its pool runs with fewer threads)."""
     import numba
     from threadpoolctl import threadpool_limits
 
-    previous = numba.get_num_threads()
     with threadpool_limits(limits=SAMPLE_THREADS):
-        numba.set_num_threads(min(SAMPLE_THREADS, numba.config.NUMBA_NUM_THREADS))
-        try:
-            yield
-        finally:
-            numba.set_num_threads(previous)
+        numba.set_num_threads(SAMPLE_THREADS)
+        yield
 
 
 def pinned(function: F) -> F:
