@@ -20,7 +20,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/inspections.smk"
 include: "workflow/rules/tipm.smk"
 include: "workflow/rules/fields.smk"
-include: "workflow/rules/simulation.smk"
+include: "workflow/rules/study.smk"
 include: "workflow/rules/report.smk"
 include: "workflow/rules/cases.smk"
 

@@ -25,7 +25,7 @@ import yaml  # noqa: E402
 
 from ttbpipe.simulation.coupled import (integrate, prepare, results_table,  # noqa: E402
                                         summarise)
-from ttbpipe.structure.kernels import _structure_accelerations  # noqa: E402
+from ttbpipe.structure.kernels import structure_accelerations as _structure_accelerations  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -18,7 +18,7 @@ from scipy.sparse import csgraph
 from scipy.sparse import linalg as splinalg
 
 from ttbpipe.structure import build_structure
-from ttbpipe.structure.kernels import _structure_accelerations
+from ttbpipe.structure.kernels import structure_accelerations as _structure_accelerations
 
 
 def best(fn, n):

@@ -14,7 +14,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sl
 from ttbpipe.structure import build_structure
 from ttbpipe.structure.girder import hermite_beam_matrices
-from ttbpipe.structure.kernels import _add_rail_point_force, _rail_point_kinematics
+from ttbpipe.structure.rail_mesh import add_rail_point_load, rail_mesh, rail_point_kinematics
 fr=np.arange(20,1501,5.0)
 def consistent(m, M):
     p=m.packed; n=p.rail_n_nodes; h=p.rail_dx; nr=2*(n-1)
@@ -40,12 +40,12 @@ for track in ('rigid','slab'):
     m=build_structure(cfg); M,K,C=m.matrices(); x=30.0+(16.0 if track=='slab' else 0.0)+0.3
     if rot=='cons': M=consistent(m,M)
     for dirn,(Fz,Fy) in (('z',(1.,0.)),('y',(0.,1.))):
-      f=np.zeros(m.n_dof); _add_rail_point_force(m.packed,0,x,Fz,Fy,0.,f)
+      f=np.zeros(m.n_dof); add_rail_point_load(rail_mesh(m.packed, 0.0),0,x,Fz,Fy,0.,f)
       H=[]
       for fq in fr:
         w=2*np.pi*fq
         u=sl.spsolve((K+1j*w*C-w*w*M).tocsc(),f)
-        kin=_rail_point_kinematics(m.packed,0,x,u.real,u.imag)
+        kin=rail_point_kinematics(rail_mesh(m.packed,0.0),0,x,u.real,u.imag)
         H.append(abs(kin[0]+1j*kin[1]) if dirn=='z' else abs(kin[2]+1j*kin[3]))
       res[(rot,track,dirn)]=np.array(H)
 for track in ('rigid','slab'):

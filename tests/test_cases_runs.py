@@ -160,17 +160,18 @@ def test_wheel_lift_is_reported_not_failed():
         table[f"girder_span1_mid_{axis}_disp_mm"] = -0.5
         table[f"rail_left_span1_mid_{axis}_acc_m_s2"] = 1.0
     summary = {"speed_kmh": 300.0, "static_wheel_load_N": {"car1": [7e4]},
-               "max_derailment_coefficient": 0.4, "max_wheel_unloading": 1.0,
-               "max_wheelset_lateral_force_N": 2e3, "max_wheel_load_N": 9e4,
-               "max_lateral_wheel_force_N": 1e3, "max_carbody_vertical_acc_m_s2": 0.1,
+               "max_derailment_coefficient": 0.4, "max_wheel_unloading_ratio": 1.0,
+               "max_lateral_wheelset_force_N": 2e3, "max_wheel_vertical_force_N": 9e4,
+               "max_wheel_lateral_force_N": 1e3, "max_carbody_vertical_acc_m_s2": 0.1,
                "max_carbody_lateral_acc_m_s2": 0.1, "contact_loss_count": 1,
-               "contact_loss_total_s": 2e-3, "contact_loss_max_s": 2e-3, "time_step_s": 1e-4,
+               "contact_loss_total_duration_s": 2e-3, "contact_loss_max_duration_s": 2e-3,
+               "time_step_s": 1e-4, "sperling_vertical_car1": 1.5, "sperling_lateral_car1": 1.5,
                "dt_limits": {}, "sperling": {"car1_vertical": 1.5, "car1_lateral": 1.5},
                "monitor_peaks": {}}
-    ext = extremes_from_run(table, summary, sim, 1)
+    ext = extremes_from_run(summary)
     assert ext["max_derailment_coefficient"] == 0.4
     assert ext["contact_loss_count"] == 1 and ext["contact_loss_max_duration_s"] == 2e-3
     hist = history_from_run(table, sim, 1)
     assert hist["derailment_coefficient"].iloc[10] == 0.4 and np.isfinite(hist.to_numpy()).all()
     with pytest.raises(RuntimeError, match="non-finite"):
-        extremes_from_run(table, {**summary, "max_wheel_load_N": np.nan}, sim, 1)
+        extremes_from_run({**summary, "max_wheel_vertical_force_N": np.nan})

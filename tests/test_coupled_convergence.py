@@ -15,8 +15,8 @@ def _peaks(dt: float, lateral_creep: str = "semi_implicit") -> tuple[float, floa
     case["simulation"]["time_step_s"] = dt
     case["simulation"]["lateral_creep"] = lateral_creep
     _, summary = run_coupled(case)
-    return (summary["max_wheel_load_N"], summary["monitor_peaks"]["deck_z_acc_m_s2"],
-            summary["max_lateral_wheel_force_N"])
+    return (summary["max_wheel_vertical_force_N"], summary["monitor_peaks"]["deck_z_acc_m_s2"],
+            summary["max_wheel_lateral_force_N"])
 
 
 DEFAULT_DT = CASE["simulation"]["time_step_s"]

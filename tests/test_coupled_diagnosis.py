@@ -109,7 +109,7 @@ def test_rough_irregularity_completes_with_finite_results_and_a_contact_loss_ind
     assert summary["max_derailment_coefficient"] >= qp.max()
     assert summary["irregularity"]["contact_demand_ratio"] > 1.0
     # the study's extremes carry the index and follow the schema
-    ext = study_samples.extremes_from_run(table, summary, {"deck_filter_hz": 30.0}, 1)
+    ext = study_samples.extremes_from_run(summary)
     assert ext["contact_loss_count"] == summary["contact_loss_count"] > 0
     assert ext["contact_loss_max_duration_s"] == summary["contact_loss_max_s"]
     row = pd.DataFrame([{"sample_index": 0, "scenario": "rough", "weight": 1.0,
@@ -185,17 +185,16 @@ def test_non_finite_values_are_stopped_with_the_column_and_the_cause():
     raw = integrate(setup)
     table = results_table(setup, raw)
     summary = summarise(setup, raw, table)
-    check_finite(setup, raw, table, summary)                 # a clean run passes
+    check_finite(setup, table, summary)                      # a clean run passes
     bad = table.copy()
     bad.loc[3, "car1_ws2_left_QP"] = np.inf
     with pytest.raises(ValueError, match=r"column\(s\) \['car1_ws2_left_QP'\].*x = ") as err:
-        check_finite(setup, raw, bad, summary)
+        check_finite(setup, bad, summary)
     assert "within every stability limit" in str(err.value)
-    with pytest.raises(ValueError, match="max_wheel_load_N"):
-        check_finite(setup, raw, table, {**summary, "max_wheel_load_N": float("nan")})
+    with pytest.raises(ValueError, match="max_wheel_vertical_force_N"):
+        check_finite(setup, table, {**summary, "max_wheel_vertical_force_N": float("nan")})
     with pytest.raises(RuntimeError, match=r"extremes column\(s\) \['max_derailment_coefficient'\]"):
-        study_samples.extremes_from_run(table, {**summary, "max_derailment_coefficient": np.inf},
-                                        {"deck_filter_hz": 30.0}, 1)
+        study_samples.extremes_from_run({**summary, "max_derailment_coefficient": np.inf})
     sim = {"history": {"span": 1, "wheel": "car1_ws2_left", "carbody_point": "car1_body_front"}}
     for name in ("girder_span1_mid_z_acc_m_s2", "girder_span1_mid_y_acc_m_s2",
                  "girder_span1_mid_z_disp_mm", "rail_left_span1_mid_z_acc_m_s2",

@@ -29,7 +29,7 @@ def test_girder_deflection_matches_moving_static_wheel_loads():
     setup = prepare(case)
     raw = integrate(setup)
     coupled = results_table(setup, raw)
-    h = setup.head_height
+    h = setup.mesh.head_height
     point_loads = []
     for w, dx in enumerate(setup.model.wheelset_x):
         for k in range(2):

@@ -20,10 +20,11 @@ import pytest
 from scipy import sparse
 from scipy.sparse import linalg as splinalg
 
-from ttbpipe.simulation.coupled import (contact_time_step_limit, coupled_time_step_limit,
-                                        prepare, rail_inverse_masses)
+from ttbpipe.simulation.coupled import prepare
+from ttbpipe.structure.rail_mesh import rail_inverse_masses, rail_mesh
+from ttbpipe.timestepping.limits import contact_time_step_limit, coupled_time_step_limit
 from ttbpipe.structure import apply_factors, build_structure, carrier_positions
-from ttbpipe.structure.integrator import _mass_inverse_sqrt
+from ttbpipe.timestepping.limits import _mass_inverse_sqrt
 from ttbpipe.vehicle.contact import build_geometry
 from ttbpipe.vehicle.model import build_train_model
 from ttbpipe.vehicle.parameters import train_from_config
@@ -47,7 +48,7 @@ def _limits(model):
     tm = build_train_model(train)
     geom = build_geometry(train.contact)
     lim = contact_time_step_limit(tm, geom, SPEED,
-                                  *rail_inverse_masses(model.packed, model.rail_head_height_m))
+                                  *rail_inverse_masses(rail_mesh(model.packed, model.rail_head_height_m), model.packed.inv_mass))
     return tm, lim, coupled_time_step_limit(model, lim)
 
 

@@ -15,13 +15,15 @@ from scipy import integrate
 
 from ttbpipe.simulation.coupled import integrate as integrate_coupled
 from ttbpipe.simulation.coupled import prepare
-from ttbpipe.simulation.run import run_moving_loads
+from ttbpipe.simulation.moving_load_case import run_moving_loads
 from ttbpipe.structure import build_structure
-from ttbpipe.structure.kernels import _add_rail_point_force, _structure_accelerations
+from ttbpipe.structure.kernels import structure_accelerations as _structure_accelerations
+from ttbpipe.structure.rail_mesh import add_rail_point_load, rail_mesh
 from ttbpipe.vehicle.contact import build_geometry
 from ttbpipe.vehicle.model import build_train_model
 from ttbpipe.vehicle.parameters import TrainParameters
-from ttbpipe.vehicle.static import StructureStatic, solve_vehicle_static
+from ttbpipe.structure.static import StructureStatic
+from ttbpipe.vehicle.static import solve_vehicle_static
 
 WHEEL_LOAD_N = 70_000.0
 X_APPROACH, X_BRIDGE = 30.0, 76.0     # mid-approach; midspan of the 32 m span starting at 60 m
@@ -39,7 +41,7 @@ def _axle_deflection_mm(model, static, x: float) -> float:
     i = int(np.argmin(np.abs(xs - x)))
     force = np.zeros(model.n_dof)
     for rail in range(2):
-        _add_rail_point_force(model.packed, rail, xs[i], -WHEEL_LOAD_N, 0.0, 0.0, force)
+        add_rail_point_load(rail_mesh(model.packed, 0.0), rail, xs[i], -WHEEL_LOAD_N, 0.0, 0.0, force)
     u = static.solve(force)
     assert np.all(np.isfinite(u))
     return -1e3 * u[5 * i]
@@ -180,8 +182,8 @@ def test_train_across_junction_starts_from_static_equilibrium(kind):
     for w in range(x_ws.size):
         for k in range(2):
             fy = -setup.static_wheel[w, k, 1]
-            _add_rail_point_force(setup.packed, k, x_ws[w], -p0[w, k], fy,
-                                  -setup.head_height * fy, force)
+            add_rail_point_load(rail_mesh(setup.packed, 0.0), k, x_ws[w], -p0[w, k], fy,
+                                  -setup.mesh.head_height * fy, force)
     acc = np.zeros_like(force)
     _structure_accelerations(setup.packed, setup.disp0, np.zeros_like(force), force, acc)
     assert np.max(np.abs(acc)) < 1e-6

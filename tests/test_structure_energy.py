@@ -17,9 +17,10 @@ from scipy.sparse import linalg as splinalg
 
 from ttbpipe.simulation.config import load_case
 from ttbpipe.structure import build_structure
-from ttbpipe.structure.integrator import stable_time_step
-from ttbpipe.structure.kernels import (_add_rail_point_force, _structure_accelerations,
-                                       _zhai_predict)
+from ttbpipe.timestepping.limits import stable_time_step
+from ttbpipe.structure.kernels import structure_accelerations as _structure_accelerations
+from ttbpipe.structure.rail_mesh import add_rail_point_load, rail_mesh
+from ttbpipe.timestepping.zhai import zhai_predict as _zhai_predict
 
 CASE = Path(__file__).resolve().parents[1] / "config" / "validation" / "undamped_free_vibration.yaml"
 UNDAMPED = load_case(CASE)["structure"]
@@ -29,7 +30,7 @@ def run_energy(m, M, K, dt, duration):
     """Relative energy deviation history of the released static deflection."""
     f = np.zeros(m.n_dof)
     for rail in (0, 1):
-        _add_rail_point_force(m.packed, rail, 14.0, -7e4, 2e3, 0.0, f)
+        add_rail_point_load(rail_mesh(m.packed, 0.0), rail, 14.0, -7e4, 2e3, 0.0, f)
     u = splinalg.spsolve(K.tocsc(), f)
     v = np.zeros(m.n_dof)
     a = np.zeros(m.n_dof)

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from ttbpipe.simulation.config import load_case
-from ttbpipe.simulation.run import run_moving_loads
+from ttbpipe.simulation.moving_load_case import run_moving_loads
 
 CONFIG = Path(__file__).resolve().parents[1] / "config" / "validation"
 L, E, I, MU, P = 32.0, 3.45e10, 12.744, 2.972e4, 1.0e5

@@ -2,7 +2,7 @@
 
 * _structure_accelerations == M^-1 (f - K u - C v) with M, K, C assembled by scipy.sparse from the
   same element/link data (independent vectorised assembly; tolerance 1e-10 relative).
-* _add_rail_point_force is the transpose of _rail_point_kinematics (virtual work, exact to 1e-12).
+* add_rail_point_load is the transpose of rail_point_kinematics (virtual work, exact to 1e-12).
 * Hermite interpolation reproduces a cubic exactly (shape-function property).
 * Zhai's stability limit omega*dt = 2.0 undamped and 1.81 at zeta = 0.05 (physics.md section 5).
 """
@@ -12,9 +12,9 @@ import pytest
 from scipy.sparse import linalg as splinalg
 
 from ttbpipe.structure import build_structure
-from ttbpipe.structure.integrator import zhai_critical_omega_dt
-from ttbpipe.structure.kernels import (_add_rail_point_force, _rail_point_kinematics,
-                                       _structure_accelerations)
+from ttbpipe.timestepping.zhai import zhai_critical_omega_dt
+from ttbpipe.structure.kernels import structure_accelerations as _structure_accelerations
+from ttbpipe.structure.rail_mesh import add_rail_point_load, rail_mesh, rail_point_kinematics
 
 SMALL = {"layout": {"approach_length_m": 12.0, "spans_m": [16.0, 12.0],
                     "approach_track": "ballasted"},
@@ -52,15 +52,15 @@ def test_point_force_is_transpose_of_kinematics(model):
         for x in (0.0, 3.3, 20.01, model.rail_x_range[1]):
             Fz, Fy, Mx = rng.normal(size=3)
             f = np.zeros(model.n_dof)
-            _add_rail_point_force(model.packed, rail, x, Fz, Fy, Mx, f)
-            z, vz, y, vy, r, vr = _rail_point_kinematics(model.packed, rail, x, disp, vel)
+            add_rail_point_load(rail_mesh(model.packed, 0.0), rail, x, Fz, Fy, Mx, f)
+            z, vz, y, vy, r, vr = rail_point_kinematics(rail_mesh(model.packed, 0.0), rail, x, disp, vel)
             assert f @ disp == pytest.approx(Fz * z + Fy * y + Mx * r, rel=1e-12, abs=1e-12)
             assert f @ vel == pytest.approx(Fz * vz + Fy * vy + Mx * vr, rel=1e-12, abs=1e-12)
     # outside the rails: nothing applied, zero kinematics
     f = np.zeros(model.n_dof)
-    _add_rail_point_force(model.packed, 0, -1.0, 1.0, 1.0, 1.0, f)
+    add_rail_point_load(rail_mesh(model.packed, 0.0), 0, -1.0, 1.0, 1.0, 1.0, f)
     assert not f.any()
-    assert _rail_point_kinematics(model.packed, 0, 1e6, disp, vel) == (0.0,) * 6
+    assert rail_point_kinematics(rail_mesh(model.packed, 0.0), 0, 1e6, disp, vel) == (0.0,) * 6
 
 
 def test_hermite_interpolation_reproduces_cubic(model):
@@ -73,7 +73,7 @@ def test_hermite_interpolation_reproduces_cubic(model):
     disp[d0 + 5 * np.arange(x.size) + 2] = cubic(x)      # lateral y of the right rail
     disp[d0 + 5 * np.arange(x.size) + 3] = slope(x)
     for xq in (0.1, 7.77, 31.9):
-        _, _, y, _, _, _ = _rail_point_kinematics(p, 1, xq, disp, disp)
+        _, _, y, _, _, _ = rail_point_kinematics(rail_mesh(p, 0.0), 1, xq, disp, disp)
         assert y == pytest.approx(cubic(xq), rel=1e-12)
 
 
@@ -103,11 +103,11 @@ def test_static_signs_follow_axes():
                                 ((0, 1e4, 0), lambda k: k[2] > 0),
                                 ((0, 0, 1e3), lambda k: k[4] > 0)):
         f = np.zeros(m.n_dof)
-        _add_rail_point_force(m.packed, 0, x, Fz, Fy, Mx, f)
+        add_rail_point_load(rail_mesh(m.packed, 0.0), 0, x, Fz, Fy, Mx, f)
         u = solve(f)
-        assert check(_rail_point_kinematics(m.packed, 0, x, u, u))
+        assert check(rail_point_kinematics(rail_mesh(m.packed, 0.0), 0, x, u, u))
     f = np.zeros(m.n_dof)
-    _add_rail_point_force(m.packed, 0, x, -1e5, 0, 0, f)
+    add_rail_point_load(rail_mesh(m.packed, 0.0), 0, x, -1e5, 0, 0, f)
     u = solve(f)
     from ttbpipe.structure.monitors import point_rows
     d, c = point_rows(m, {"kind": "slab", "x_m": x})["roll"]

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from ttbpipe.simulation.config import load_case
-from ttbpipe.simulation.run import run_moving_loads
+from ttbpipe.simulation.moving_load_case import run_moving_loads
 from ttbpipe.structure import build_structure
 from ttbpipe.structure.modal import modal_analysis
 

@@ -18,9 +18,9 @@ import pytest
 from scipy.sparse import linalg as splinalg
 
 from ttbpipe.simulation.config import load_case
-from ttbpipe.simulation.run import run_moving_loads
+from ttbpipe.simulation.moving_load_case import run_moving_loads
 from ttbpipe.structure import apply_factors, build_structure, carrier_positions
-from ttbpipe.structure.kernels import _add_rail_point_force, _rail_point_kinematics
+from ttbpipe.structure.rail_mesh import add_rail_point_load, rail_mesh, rail_point_kinematics
 from ttbpipe.structure.monitors import point_rows
 
 CASE = Path(__file__).resolve().parents[1] / "config" / "validation" / "random_properties.yaml"
@@ -34,7 +34,7 @@ def girder_midspan_static(model, span):
     x = red.start_m + 0.5 * red.length_m
     f = np.zeros(model.n_dof)
     for rail in (0, 1):
-        _add_rail_point_force(model.packed, rail, x, -7e4, 0.0, 0.0, f)
+        add_rail_point_load(rail_mesh(model.packed, 0.0), rail, x, -7e4, 0.0, 0.0, f)
     u = splinalg.spsolve(K.tocsc(), f)
     out = []
     for s, r in enumerate(model.spans):
@@ -67,10 +67,10 @@ def test_pad_factor_is_local():
     for model in (nominal, soft):
         _, K, _ = model.matrices()
         f = np.zeros(model.n_dof)
-        _add_rail_point_force(model.packed, 0, 30.0, -1e5, 0.0, 0.0, f)
-        _add_rail_point_force(model.packed, 0, 50.0, -1e5, 0.0, 0.0, f)
+        add_rail_point_load(rail_mesh(model.packed, 0.0), 0, 30.0, -1e5, 0.0, 0.0, f)
+        add_rail_point_load(rail_mesh(model.packed, 0.0), 0, 50.0, -1e5, 0.0, 0.0, f)
         u = splinalg.spsolve(K.tocsc(), f)
-        res.append([_rail_point_kinematics(model.packed, 0, x, u, u)[0] for x in (30.0, 50.0)])
+        res.append([rail_point_kinematics(rail_mesh(model.packed, 0.0), 0, x, u, u)[0] for x in (30.0, 50.0)])
     ratio_near = res[1][0] / res[0][0]
     assert 1.2 < ratio_near < 0.5 ** -0.75 + 0.01
     assert res[1][1] == pytest.approx(res[0][1], rel=1e-3)

@@ -1,4 +1,4 @@
-"""Zhai step limit of the vehicle's own modes (ttbpipe.vehicle.stability, structure.integrator).
+"""Zhai step limit of the vehicle's own modes (ttbpipe.vehicle.stability, timestepping.zhai).
 
 The criterion: spectral radius of Zhai's one-step amplification matrix of the linear system
 M x'' + C x' + K x = 0 <= 1 (bisection; ``zhai_critical_time_step``). References:
@@ -26,7 +26,7 @@ import pytest
 import yaml
 
 from ttbpipe.simulation.coupled import SimulationStopped, integrate, prepare
-from ttbpipe.structure.integrator import (zhai_amplification, zhai_amplification_matrix,
+from ttbpipe.timestepping.zhai import (zhai_amplification, zhai_amplification_matrix,
                                           zhai_critical_omega_dt, zhai_critical_time_step,
                                           zhai_spectral_radius)
 from ttbpipe.vehicle.contact import build_geometry

@@ -4,7 +4,7 @@
 #
 # Case 1 (speed sweep, Figs. 6-8, eq. 55) has rules of its own: deterministic runs per speed in
 # batches, one time-history run, and the figures. Cases 2-4 run through the study stage
-# (simulation.smk, report.smk) and add a comparison step over its aggregated outputs.
+# (study.smk, report.smk) and add a comparison step over its aggregated outputs.
 
 from ttbpipe.study.cases import speed_batches as _case_speed_batches
 from ttbpipe.study.cases import sweep_speeds as _case_sweep_speeds

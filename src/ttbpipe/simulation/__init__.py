@@ -1,7 +1,12 @@
-"""One deterministic simulation case: ``ttbpipe simulate CONFIG.yaml --out RESULT.parquet``.
+"""Simulation cases: coupled train-track-bridge runs and moving-load runs of the structure.
 
-* :mod:`ttbpipe.simulation.config` -- case YAML schema (schemas/simulation.schema.json) and loader;
-* :mod:`ttbpipe.simulation.run` -- moving-load cases on the structure (issue 3);
-* :mod:`ttbpipe.simulation.coupled` -- train cases (vehicle owner), used when the case has ``train:``;
-* :mod:`ttbpipe.simulation.cli` -- the command.
+* :mod:`.coupled` -- :func:`run_coupled`, a coupled run: :mod:`.setup` (case -> train,
+  structure, track input, step, static state), :mod:`.loop` (the numba time loop),
+  :mod:`.recorder` (what the loop records of the train), :mod:`.outputs` (time histories,
+  response indices, summary), :mod:`.diagnosis` (why a run stopped);
+* :mod:`.moving_load_case` -- moving-load cases on the structure alone (validation);
+* :mod:`.config` -- case YAML schema (schemas/simulation.schema.json) and loader;
+* :mod:`.cli` -- ``ttbpipe simulate CONFIG.yaml --out RESULT.parquet``.
+
+Architecture and interfaces: docs/dev/architecture.md.
 """

@@ -1,7 +1,7 @@
 """``ttbpipe simulate CONFIG.yaml --out RESULT.parquet``: one deterministic case.
 
-Cases with a ``train:`` section go to :func:`ttbpipe.simulation.coupled.run_coupled` (vehicle
-owner); cases with ``loads:`` run moving loads on the structure (:mod:`ttbpipe.simulation.run`).
+Cases with a ``train:`` section go to :func:`ttbpipe.simulation.coupled.run_coupled`; cases with
+``loads:`` run moving loads on the structure (:mod:`ttbpipe.simulation.moving_load_case`).
 The table (time_s + monitor columns with units) is written atomically with the resolved case in
 its provenance (kind "simulation").
 
@@ -35,18 +35,14 @@ def run(args: argparse.Namespace) -> int:
     try:
         case = load_case(args.config)
         if "train" in case:
-            try:
-                from .coupled import run_coupled
-            except ModuleNotFoundError as exc:
-                raise ValueError(f"{args.config}: train cases need ttbpipe.simulation.coupled, "
-                                 f"which is not available ({exc})") from exc
-            from .coupled import SimulationStopped
+            from .coupled import SimulationStopped, run_coupled
+
             try:
                 table, summary = run_coupled(case, propose_auto=True)
             except SimulationStopped as exc:
                 raise ValueError(str(exc)) from exc
         else:
-            from .run import run_moving_loads
+            from .moving_load_case import run_moving_loads
             table, summary = run_moving_loads(case)
     except (ValueError, FloatingPointError) as exc:
         print(f"ttbpipe simulate: {exc}", file=sys.stderr)

@@ -5,7 +5,7 @@ not always a time-step problem: an implausible or too rough irregularity, or whe
 for it, stop it as well, at any step. :func:`explain` weighs, in this order,
 
 1. the step against every stability limit of the case (``dt_limits`` of the setup/summary;
-   :func:`ttbpipe.simulation.coupled.step_limits`): above one, the step is the cause;
+   :func:`ttbpipe.timestepping.limits.step_limits`): above one, the step is the cause;
 2. the irregularity's amplitude in the 3-25 m band (EN 13848's D1 band, where the isolated-defect
    limits apply) against :data:`PLAUSIBLE_D1_PEAK_MM`, and a factor 1000 beyond it (mm vs m, or
    a wrong ``irregularity.scale``);
@@ -51,7 +51,7 @@ def _d1_peak_mm(values: np.ndarray, dx: float) -> float:
 def irregularity_indicators(irr, speed: float, model) -> dict[str, float]:
     """Amplitudes and contact demand of the irregularity input of a run (module docstring).
 
-    ``irr``: :class:`ttbpipe.simulation.coupled.Irregularity` (rows z_left, z_right, y_left,
+    ``irr``: :class:`ttbpipe.irregularity.track_input.Irregularity` (rows z_left, z_right, y_left,
     y_right in m); returns peak_vertical_mm, peak_lateral_mm (all wavelengths), their 3-25 m band
     peaks (``*_d1_mm``), contact_hold_acc_m_s2 = min P0 / m_u, contact_demand_acc_m_s2 =
     V^2 max |z''| and contact_demand_ratio (their ratio).
@@ -104,7 +104,7 @@ def contact_loss_stats(contact_loss: np.ndarray, dt: float, ws_x0: np.ndarray, s
 
 
 def _exceeded(dt: float, limits: Mapping[str, Any]) -> list[tuple[str, float]]:
-    from .coupled import LIMIT_NAMES, step_limits
+    from ..timestepping.limits import LIMIT_NAMES, step_limits
 
     out = []
     for key, value in step_limits(limits).items():
@@ -125,7 +125,7 @@ def explain(dt: float, limits: Mapping[str, Any], irr: Mapping[str, float],
     cause: ``time_step``, ``irregularity_scale``, ``irregularity_rough``, ``contact_loss`` or
     ``unexplained``.
     """
-    from .coupled import LIMIT_NAMES, step_limits, time_step_remedy
+    from ..timestepping.limits import LIMIT_NAMES, step_limits, time_step_remedy
 
     cfg = dict(irregularity_config or {})
     source = cfg.get("source", "synthetic")

@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..response_indices import RESPONSE_INDEX_REGISTRY
+
 #: Standard gravity (m/s^2), used to express limits given in g (ISO 80000-3).
 G_STANDARD = 9.80665
 
@@ -79,53 +81,9 @@ EXTREMES_CONTEXT_COLUMNS: tuple[ColumnSpec, ...] = (
                "limit 15 kN + P0/3", lower=0.0),
 )
 
-RESPONSE_INDEX_COLUMNS: tuple[ColumnSpec, ...] = (
-    ColumnSpec("max_derailment_coefficient", "float64", "1",
-               "maximum over the run and all wheels of the derailment coefficient Q/P "
-               "(|lateral| / vertical wheel-rail force)", lower=0.0),
-    ColumnSpec("max_wheel_unloading_ratio", "float64", "1",
-               "maximum over the run and all wheels of the unloading ratio (P0 - P)/P0 "
-               "(physics.md section 7, bug 11)", upper=1.0),
-    ColumnSpec("max_lateral_wheelset_force_N", "float64", "N",
-               "maximum over the run and all wheelsets of |H|, the lateral wheelset "
-               "(axle-box) force", lower=0.0),
-    ColumnSpec("max_wheel_vertical_force_N", "float64", "N",
-               "maximum over the run and all wheels of the vertical wheel-rail force P", lower=0.0),
-    ColumnSpec("max_wheel_lateral_force_N", "float64", "N",
-               "maximum over the run and all wheels of |Q|, the lateral wheel-rail force",
-               lower=0.0),
-    ColumnSpec("max_carbody_vertical_acc_m_s2", "float64", "m/s^2",
-               "maximum over the run and all cars of |vertical car-body acceleration|", lower=0.0),
-    ColumnSpec("max_carbody_lateral_acc_m_s2", "float64", "m/s^2",
-               "maximum over the run and all cars of |lateral car-body acceleration|", lower=0.0),
-    ColumnSpec("sperling_vertical", "float64", "1",
-               "largest vertical Sperling ride index over the cars (physics.md section 4)",
-               lower=0.0),
-    ColumnSpec("sperling_lateral", "float64", "1",
-               "largest lateral Sperling ride index over the cars", lower=0.0),
-    ColumnSpec("max_deck_vertical_acc_m_s2", "float64", "m/s^2",
-               "maximum over the run and the deck monitors of |vertical deck acceleration| "
-               "(band-limited as in EN 1990 A2 A2.4.4.2.1)", lower=0.0),
-    ColumnSpec("max_deck_lateral_acc_m_s2", "float64", "m/s^2",
-               "maximum over the run and the deck monitors of |lateral deck acceleration|",
-               lower=0.0),
-    ColumnSpec("max_rail_vertical_acc_m_s2", "float64", "m/s^2",
-               "maximum over the run and the rail monitors of |vertical rail acceleration|",
-               lower=0.0),
-    ColumnSpec("max_rail_lateral_acc_m_s2", "float64", "m/s^2",
-               "maximum over the run and the rail monitors of |lateral rail acceleration|",
-               lower=0.0),
-    ColumnSpec("max_girder_vertical_disp_m", "float64", "m",
-               "maximum over the run and the girder monitors of |vertical girder displacement|",
-               lower=0.0),
-    ColumnSpec("contact_loss_count", "float64", "1",
-               "number of losses of wheel-rail contact (runs of steps with zero normal force) "
-               "over the run and all wheels; 0 when every wheel stays on the rail", lower=0.0),
-    ColumnSpec("contact_loss_total_duration_s", "float64", "s",
-               "time without wheel-rail contact over the run, summed over the wheels", lower=0.0),
-    ColumnSpec("contact_loss_max_duration_s", "float64", "s",
-               "longest single loss of wheel-rail contact over the run and all wheels", lower=0.0),
-)
+RESPONSE_INDEX_COLUMNS: tuple[ColumnSpec, ...] = tuple(
+    ColumnSpec(i.name, "float64", i.unit, i.description, lower=i.lower, upper=i.upper)
+    for i in RESPONSE_INDEX_REGISTRY)
 
 EXTREMES_COLUMNS: tuple[ColumnSpec, ...] = (
     EXTREMES_KEY_COLUMNS + EXTREMES_CONTEXT_COLUMNS + RESPONSE_INDEX_COLUMNS)

@@ -224,11 +224,11 @@ class StructureModel:
         return assemble_matrices(self.packed)
 
     def stable_time_step(self, safety: float = 0.9) -> float:
-        from .integrator import stable_time_step
+        from ..timestepping.limits import stable_time_step
         return stable_time_step(self, safety)["dt_s"]
 
     def check_time_step(self, dt: float) -> None:
-        from .integrator import check_time_step
+        from ..timestepping.limits import check_time_step
         check_time_step(self, dt)
 
 

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import linalg
 
+from .shape_functions import hermite_shape  # noqa: F401  (girder users import it from here)
+
 
 def hermite_beam_matrices(L: float, EI: float, m: float) -> tuple[np.ndarray, np.ndarray]:
     """Element stiffness and consistent mass of a Hermite beam, DOFs (w1, w1', w2, w2').
@@ -38,12 +40,6 @@ def hermite_beam_matrices(L: float, EI: float, m: float) -> tuple[np.ndarray, np
                                    [54, 13 * L, 156, -22 * L],
                                    [-13 * L, -3 * L * L, -22 * L, 4 * L * L]])
     return k, mm
-
-
-def hermite_shape(xi: float, L: float) -> np.ndarray:
-    """Hermite cubic shape functions at local coordinate xi in [0, 1] (slope DOFs)."""
-    return np.array([1 - 3 * xi ** 2 + 2 * xi ** 3, L * (xi - 2 * xi ** 2 + xi ** 3),
-                     3 * xi ** 2 - 2 * xi ** 3, L * (xi ** 3 - xi ** 2)])
 
 
 @dataclass

@@ -15,7 +15,8 @@ element (no global matrix in the time loop):
   coordinates) with its own K, Rayleigh C (eq. 18) and the inverse of its mass block.
 
 DOFs ``[0, n_diag)`` have a diagonal (lumped) mass; the span blocks follow.
-Node layout of beams (5 DOF): z, dz/dx, y, dy/dx, roll. See docs/dev/structure_interface.md.
+Node layout of beams (5 DOF): z, dz/dx, y, dy/dx, roll. Loads and kinematics at points of the
+rails: :mod:`ttbpipe.structure.rail_mesh` (the interface to whatever runs on the rails).
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
+
+from .shape_functions import hermite
 
 StructurePacked = namedtuple("StructurePacked", [
     "n_dof", "n_diag", "inv_mass",
@@ -36,9 +39,8 @@ StructurePacked = namedtuple("StructurePacked", [
     "pad_foot_depth", "pad_seat_half_thickness",
     "bal_sleeper", "bal_block", "bal_next", "bal_k", "bal_c", "bal_half_gauge",
 ])
-# Link triples and rail pads (added after the interface was published): default to none, so that
-# code building a StructurePacked by keyword without them (e.g. an empty rigid structure) keeps
-# working.
+# Link triples, rail pads and ballast default to none, so that a structure without them (a bare
+# girder, rails on rigid ground) is built by keyword without listing them.
 StructurePacked.__new__.__defaults__ = (
     np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0),
     np.zeros(0),
@@ -109,7 +111,7 @@ def _link_forces(packed, disp, vel, force):
 @njit(cache=True)
 def _triple_forces(packed, disp, vel, force):
     """Subtract the forces of every link triple (CA quadrature points; rail pads and ballast have
-    compact kernels since issue 9).
+    compact kernels of their own).
 
     A triple is three links (vertical, lateral, roll) over one shared DOF list: relative
     displacements d_r = sum_j coef[j, r] u[dof_j] (r = 0, 1, 2), forces p_r = k_r d_r + c_r d'_r,
@@ -153,7 +155,7 @@ def _pad_forces(packed, disp, vel, force):
     """Subtract the forces of every rail pad (fastener): vertical, lateral and roll spring-dampers
     between a rail node and its seat (paper eq. 22).
 
-    Pads are stored compactly (issue 9, docs/performance.md: half the time of the generic link
+    Pads are stored compactly (docs/performance.md: half the time of the generic link
     triples, which read 6-13 (DOF, 3 coefficients) entries per pad): rail node first DOF ``rd``
     (z, dz/dx, y, dy/dx, roll), seat DOFs, geometry ``pad_geom[3p:3p+3]`` = (xi, L, e) and
     k, c per direction (vertical, lateral at the rail foot, roll). ``pad_group`` = numbers of
@@ -199,13 +201,7 @@ def _pad_forces(packed, disp, vel, force):
         n1 = n2 = n3 = n4 = 0.0
         if p < n_slab:
             xi = geom[3 * p]
-            L = geom[3 * p + 1]
-            xi2 = xi * xi
-            xi3 = xi2 * xi
-            n1 = 1.0 - 3.0 * xi2 + 2.0 * xi3
-            n2 = L * (xi - 2.0 * xi2 + xi3)
-            n3 = 3.0 * xi2 - 2.0 * xi3
-            n4 = L * (xi3 - xi2)
+            n1, n2, n3, n4 = hermite(xi, geom[3 * p + 1])
             wa = 1.0 - xi
             rs = wa * disp[da + 4] + xi * disp[db + 4]
             vrs = wa * vel[da + 4] + xi * vel[db + 4]
@@ -257,8 +253,8 @@ def _ballast_forces(packed, disp, vel, force):
     block spring-damper on z_s + e roll_s - z_b (``bal_k[0]``, ``bal_c[0]``), block -> subgrade on
     z_b (index 1), shear between the block and the same side's block of the next sleeper on
     z_b - z_b,next when ``bal_next[j]`` (index 2), and the sleeper's lateral resistance on y_s
-    (index 3). Same physics as the former link triples (issue 9 compact form;
-    ``assembly.ballast_link_rows`` gives the generic rows the reference matrices use).
+    (index 3). Same physics as the generic link rows (``assembly.ballast_link_rows``), which the
+    reference matrices use.
     """
     e = packed.bal_half_gauge
     kz, ksub, ksh, ky = packed.bal_k[0], packed.bal_k[1], packed.bal_k[2], packed.bal_k[3]
@@ -289,7 +285,7 @@ def _ballast_forces(packed, disp, vel, force):
 
 
 @njit(cache=True)
-def _structure_accelerations(packed, disp, vel, nodal_force, acc_out):
+def structure_accelerations(packed, disp, vel, nodal_force, acc_out):
     """acc_out = M^-1 (nodal_force - K disp - C vel) for the whole structure.
 
     ``nodal_force`` holds the external loads only and is not modified. Diagonal-mass DOFs use
@@ -322,127 +318,3 @@ def _structure_accelerations(packed, disp, vel, nodal_force, acc_out):
             for j in range(m):
                 a += packed.span_Minv[row + j] * tmp[j]
             acc_out[o + i] = a
-
-
-@njit(cache=True)
-def _rail_locate_at(rail_x0, rail_dx, rail_n_nodes, x):
-    """Element index and local coordinate xi in [0, 1] of abscissa x on a uniform rail mesh
-    (first node at rail_x0, spacing rail_dx, rail_n_nodes nodes); (-1, 0) outside or no rail."""
-    n_el = rail_n_nodes - 1
-    if n_el < 1:
-        return -1, 0.0
-    s = (x - rail_x0) / rail_dx
-    if s < 0.0 or s > n_el:
-        return -1, 0.0
-    e = int(s)
-    if e >= n_el:
-        e = n_el - 1
-    return e, s - e
-
-
-@njit(cache=True)
-def _rail_locate(packed, x):
-    """Element index and local coordinate xi in [0, 1] of abscissa x on the rails (-1 outside)."""
-    if packed.n_rails == 0:
-        return -1, 0.0
-    return _rail_locate_at(packed.rail_x0, packed.rail_dx, packed.rail_n_nodes, x)
-
-
-@njit(cache=True)
-def _hermite(xi, L):
-    """Hermite cubic shape functions (N1, N2, N3, N4) with slope DOFs (paper's N_Zr/N_Yr)."""
-    xi2 = xi * xi
-    xi3 = xi2 * xi
-    return (1.0 - 3.0 * xi2 + 2.0 * xi3, L * (xi - 2.0 * xi2 + xi3),
-            3.0 * xi2 - 2.0 * xi3, L * (xi3 - xi2))
-
-
-@njit(cache=True)
-def _rail_point_kinematics_at(rail_x0, rail_dx, rail_n_nodes, dof0, x, disp, vel):
-    """:func:`_rail_point_kinematics` on the rail whose node 0 starts at DOF ``dof0``.
-
-    Takes the rail geometry as scalars instead of the ``StructurePacked`` tuple: passing the
-    tuple to a numba function increfs/decrefs its ~30 arrays per call (measured ~0.3 us per
-    call, 80 calls per coupled step); hot loops call this form (docs/performance.md).
-    """
-    e, xi = _rail_locate_at(rail_x0, rail_dx, rail_n_nodes, x)
-    if e < 0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    L = rail_dx
-    a = dof0 + 5 * e
-    b = a + 5
-    n1, n2, n3, n4 = _hermite(xi, L)
-    z = n1 * disp[a] + n2 * disp[a + 1] + n3 * disp[b] + n4 * disp[b + 1]
-    vz = n1 * vel[a] + n2 * vel[a + 1] + n3 * vel[b] + n4 * vel[b + 1]
-    y = n1 * disp[a + 2] + n2 * disp[a + 3] + n3 * disp[b + 2] + n4 * disp[b + 3]
-    vy = n1 * vel[a + 2] + n2 * vel[a + 3] + n3 * vel[b + 2] + n4 * vel[b + 3]
-    r = (1.0 - xi) * disp[a + 4] + xi * disp[b + 4]
-    vr = (1.0 - xi) * vel[a + 4] + xi * vel[b + 4]
-    return z, vz, y, vy, r, vr
-
-
-@njit(cache=True)
-def _rail_point_kinematics(packed, rail, x, disp, vel):
-    """(z, dz/dt, y, dy/dt, roll, droll/dt) of rail ``rail`` at abscissa x (zeros outside).
-
-    Hermite interpolation for z and y, linear for roll, within the element containing x.
-    """
-    if packed.n_rails == 0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    return _rail_point_kinematics_at(packed.rail_x0, packed.rail_dx, packed.rail_n_nodes,
-                                     packed.rail_dof0[rail], x, disp, vel)
-
-
-@njit(cache=True)
-def _add_rail_point_force_at(rail_x0, rail_dx, rail_n_nodes, dof0, x, Fz, Fy, Mx, nodal_force):
-    """:func:`_add_rail_point_force` on the rail whose node 0 starts at DOF ``dof0`` (scalar
-    geometry arguments, for hot loops; see :func:`_rail_point_kinematics_at`)."""
-    e, xi = _rail_locate_at(rail_x0, rail_dx, rail_n_nodes, x)
-    if e < 0:
-        return
-    L = rail_dx
-    a = dof0 + 5 * e
-    b = a + 5
-    n1, n2, n3, n4 = _hermite(xi, L)
-    nodal_force[a] += n1 * Fz
-    nodal_force[a + 1] += n2 * Fz
-    nodal_force[b] += n3 * Fz
-    nodal_force[b + 1] += n4 * Fz
-    nodal_force[a + 2] += n1 * Fy
-    nodal_force[a + 3] += n2 * Fy
-    nodal_force[b + 2] += n3 * Fy
-    nodal_force[b + 3] += n4 * Fy
-    nodal_force[a + 4] += (1.0 - xi) * Mx
-    nodal_force[b + 4] += xi * Mx
-
-
-@njit(cache=True)
-def _add_rail_point_force(packed, rail, x, Fz, Fy, Mx, nodal_force):
-    """Add the consistent nodal loads of a point force (Fz, Fy) and moment Mx on rail ``rail`` at x.
-
-    Transpose of :func:`_rail_point_kinematics` (virtual work); nothing is added outside the rail.
-    """
-    if packed.n_rails == 0:
-        return
-    _add_rail_point_force_at(packed.rail_x0, packed.rail_dx, packed.rail_n_nodes,
-                             packed.rail_dof0[rail], x, Fz, Fy, Mx, nodal_force)
-
-
-@njit(cache=True)
-def _zhai_predict(disp, vel, acc, acc_prev, dt, psi, phi):
-    """Zhai's explicit two-step update of displacement and velocity, in place.
-
-    X_{n+1} = X_n + V_n dt + (1/2 + psi) A_n dt^2 - psi A_{n-1} dt^2,
-    V_{n+1} = V_n + (1 + phi) A_n dt - phi A_{n-1} dt   (Zhai 1996, IJNME 39:4199;
-    physics.md section 5). psi = phi = 0 on the first step, 1/2 afterwards.
-    """
-    h2 = dt * dt
-    ca = (0.5 + psi) * h2
-    cp = psi * h2
-    va = (1.0 + phi) * dt
-    vp = phi * dt
-    for i in range(disp.shape[0]):
-        a = acc[i]
-        ap = acc_prev[i]
-        disp[i] += vel[i] * dt + ca * a - cp * ap
-        vel[i] += va * a - vp * ap

@@ -9,12 +9,15 @@ Column names carry units: ``<name>_<dir>_disp_mm``, ``_vel_m_s``, ``_acc_m_s2`` 
 
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+from numba import njit
 
-from .girder import hermite_shape
+from .rail_mesh import NODE_DOFS, rail_mesh
+from .shape_functions import hermite_shape
 
 QUANTITIES = {"displacement": 0, "velocity": 1, "acceleration": 2}
 _SUFFIX = {("z", 0): ("disp_mm", 1e3), ("z", 1): ("vel_m_s", 1.0), ("z", 2): ("acc_m_s2", 1.0),
@@ -38,6 +41,52 @@ class MonitorSet:
     def n(self) -> int:
         return len(self.names)
 
+    def recorder(self, n_out: int) -> "MonitorRecorder":
+        """A :class:`MonitorRecorder` of these monitors with room for ``n_out`` output rows."""
+        return MonitorRecorder(self.ptr, self.dof, self.coef, self.qty, self.scale,
+                               np.zeros((n_out, self.n)), np.zeros(self.n))
+
+
+#: Monitors as a time loop records them: the compiled rows (ptr, dof, coef, qty), the unit
+#: scale of each column, the decimated history hist[row, monitor] (scaled) and the largest
+#: |value| over every step, peak[monitor] (scaled). Shared by the coupled train-track-bridge
+#: loop and the structure's moving-load loop.
+MonitorRecorder = namedtuple("MonitorRecorder", ["ptr", "dof", "coef", "qty", "scale", "hist",
+                                                 "peak"])
+
+
+def no_monitors(n_out: int = 1) -> MonitorRecorder:
+    """A recorder without monitors (rigid track)."""
+    i0, f0 = np.zeros(0, np.int64), np.zeros(0)
+    return MonitorRecorder(np.zeros(1, np.int64), i0, f0, i0, f0, np.zeros((n_out, 0)), f0)
+
+
+@njit(cache=True)
+def record_monitors(rec, disp, vel, acc, row):
+    """Evaluate every monitor at this step: sum_j coef_j q[dof_j] with q = disp, vel or acc
+    (qty 0, 1, 2), times its unit scale; update ``rec.peak``; write ``rec.hist[row]`` when
+    ``row >= 0`` (an output step). Returns the largest |unscaled| displacement monitor value
+    (NaN if one is NaN), for the loops' blow-up checks."""
+    largest = 0.0
+    for m in range(rec.qty.shape[0]):
+        s = 0.0
+        for j in range(rec.ptr[m], rec.ptr[m + 1]):
+            d = rec.dof[j]
+            if rec.qty[m] == 0:
+                s += rec.coef[j] * disp[d]
+            elif rec.qty[m] == 1:
+                s += rec.coef[j] * vel[d]
+            else:
+                s += rec.coef[j] * acc[d]
+        if rec.qty[m] == 0 and not abs(s) <= largest:
+            largest = abs(s)
+        s *= rec.scale[m]
+        if abs(s) > rec.peak[m]:
+            rec.peak[m] = abs(s)
+        if row >= 0:
+            rec.hist[row, m] = s
+    return largest
+
 
 def _beam_rows(dof_a: int, dof_b: int, L: float, xi: float) -> dict[str, tuple]:
     N = hermite_shape(xi, L)
@@ -59,10 +108,11 @@ def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
         if rail not in (0, 1) or not lay.rail_x[0] <= x <= lay.rail_x[-1]:
             raise ValueError(f"monitor {name}: rail {rail} at x={x} m is outside the rails "
                              f"[{lay.rail_x[0]}, {lay.rail_x[-1]}] m or rail is not 0/1")
-        h = model.packed.rail_dx
+        mesh = rail_mesh(model.packed, 0.0)
+        h = mesh.dx
         e = min(int(x / h), lay.rail_x.size - 2)
-        a = int(model.packed.rail_dof0[rail]) + 5 * e
-        return _beam_rows(a, a + 5, h, (x - lay.rail_x[e]) / h)
+        a = int(mesh.dof0[rail]) + NODE_DOFS * e
+        return _beam_rows(a, a + NODE_DOFS, h, (x - lay.rail_x[e]) / h)
     if kind == "slab":
         x = float(spec["x_m"])
         se = model.slab_elements

@@ -1,8 +1,10 @@
 """Moving point loads on the structure (validation without a vehicle) and the run driver.
 
 Loads enter the rails through the Hermite shape functions of the element they are in
-(:func:`~ttbpipe.structure.kernels._add_rail_point_force`), exactly as the vehicle's contact
-forces do. For girder-only validation models (``layout.bridge_track: none``) the loads act on the
+(:func:`ttbpipe.structure.rail_mesh.add_rail_point_load`), exactly as the vehicle's contact
+forces do; the time loop (:func:`_moving_load_loop`) uses the same Zhai step
+(:mod:`ttbpipe.timestepping.zhai`) and the same monitor recorder
+(:func:`ttbpipe.structure.monitors.record_monitors`) as the coupled loop. For girder-only validation models (``layout.bridge_track: none``) the loads act on the
 girder axis through the span's reduced basis instead (``loads.target: girder``).
 
 Sign convention: forces in the structure's axes (z up, y left); a wheel pressing on the rail is
@@ -13,15 +15,19 @@ from __future__ import annotations
 
 import logging
 import time
+from collections import namedtuple
 from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
+from numba import njit
 
-from .integrator import _run_moving_loads, check_time_step, stable_time_step
-from .kernels import _structure_accelerations
-from .monitors import compile_monitors, default_monitors
+from ..timestepping.limits import check_time_step, stable_time_step
+from ..timestepping.zhai import zhai_predict
+from .kernels import structure_accelerations
+from .monitors import compile_monitors, default_monitors, record_monitors
+from .rail_mesh import add_rail_point_load, rail_mesh
 
 log = logging.getLogger(__name__)
 
@@ -138,6 +144,63 @@ def default_duration(model, loads: LoadSet) -> float:
     return float(np.max((x_end - loads.x0[moving]) / loads.speed[moving]))
 
 
+#: The loads as the loop reads them: rail, x at t = 0, speed, constant (Fz, Fy, Mx) and harmonic
+#: amplitudes, frequency, phase (arrays over the loads); plus generalised forces table[step, j]
+#: added to DOF dofs[j] (loads on the girder coordinates of girder-only validation models).
+LoadArrays = namedtuple("LoadArrays", ["rail", "x0", "speed", "F0", "F1", "freq", "phase",
+                                       "extra_dofs", "extra_table"])
+#: Structure state of a time loop: displacements, velocities, accelerations (this and the last
+#: step) and the external nodal loads of the step.
+StructureState = namedtuple("StructureState", ["disp", "vel", "acc", "acc_prev", "nodal_force"])
+
+
+@njit(cache=True)
+def _moving_load_loop(packed, mesh, loads, state, rec, t_out, dt, n_steps, out_every, blowup_m):
+    """Zhai time loop with moving point loads on the rails; records the monitors every
+    ``out_every`` steps (row k: t = k out_every dt).
+
+    Load i: rail loads.rail[i], position x = x0[i] + speed[i] t, forces (Fz, Fy, Mx) = F0[i] +
+    F1[i] sin(2 pi freq[i] t + phase[i]). Returns the step at which a displacement monitor or a
+    diagonal-mass DOF exceeded ``blowup_m`` or became NaN (-1 if none).
+    """
+    n_loads = loads.rail.shape[0]
+    n_extra = loads.extra_dofs.shape[0]
+    disp, vel, acc, acc_prev, nodal_force = (state.disp, state.vel, state.acc, state.acc_prev,
+                                             state.nodal_force)
+    row = 0
+    for step in range(n_steps + 1):
+        t = step * dt
+        if step > 0:
+            psi = 0.0 if step == 1 else 0.5
+            zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
+            for i in range(disp.shape[0]):
+                acc_prev[i] = acc[i]
+        for i in range(nodal_force.shape[0]):
+            nodal_force[i] = 0.0
+        for i in range(n_loads):
+            x = loads.x0[i] + loads.speed[i] * t
+            s = np.sin(2.0 * np.pi * loads.freq[i] * t + loads.phase[i])
+            add_rail_point_load(mesh, loads.rail[i], x,
+                                loads.F0[i, 0] + loads.F1[i, 0] * s,
+                                loads.F0[i, 1] + loads.F1[i, 1] * s,
+                                loads.F0[i, 2] + loads.F1[i, 2] * s, nodal_force)
+        if n_extra > 0:
+            for j in range(n_extra):
+                nodal_force[loads.extra_dofs[j]] += loads.extra_table[step, j]
+        structure_accelerations(packed, disp, vel, nodal_force, acc)
+        if step % out_every == 0:
+            t_out[row] = t
+            largest = record_monitors(rec, disp, vel, acc, row)
+            row += 1
+            if not largest < blowup_m:
+                return step
+        if step % 1000 == 0:
+            for i in range(packed.n_diag):
+                if not (abs(disp[i]) < blowup_m):
+                    return step
+    return -1
+
+
 def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=None,
              output_every: int = 1, check_dt: bool = True, blowup_m: float = 1.0):
     """Run the moving-load case; returns (DataFrame of monitors with time_s, info dict).
@@ -154,23 +217,23 @@ def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=No
     n_steps = int(round(duration / dt))
     output_every = max(1, int(output_every))
     n_out = n_steps // output_every + 1
-    out = np.zeros((n_out, 1 + mons.n))
+    rec = mons.recorder(n_out)
+    t_out = np.zeros(n_out)
     n = model.n_dof
-    disp, vel, acc, acc_prev, nf = (np.zeros(n) for _ in range(5))
+    state = StructureState(*(np.zeros(n) for _ in range(5)))
     if loads.target == "girder":
         extra_dofs, extra = girder_force_table(model, loads, dt, n_steps)
-        rails = np.zeros(0, np.int64)
         empty = np.zeros(0)
-        load_args = (rails, empty, empty, np.zeros((0, 3)), np.zeros((0, 3)), empty, empty)
+        arrays = LoadArrays(np.zeros(0, np.int64), empty, empty, np.zeros((0, 3)),
+                            np.zeros((0, 3)), empty, empty, extra_dofs, extra)
     else:
-        extra_dofs, extra = np.zeros(0, np.int64), np.zeros((1, 0))
-        load_args = (loads.rail, loads.x0, loads.speed, loads.F0, loads.F1, loads.freq,
-                     loads.phase)
+        arrays = LoadArrays(loads.rail, loads.x0, loads.speed, loads.F0, loads.F1, loads.freq,
+                            loads.phase, np.zeros(0, np.int64), np.zeros((1, 0)))
     t0 = time.perf_counter()
     c0 = time.process_time()
-    status = _run_moving_loads(model.packed, *load_args, extra_dofs, extra, float(dt),
-                               n_steps, output_every, mons.ptr, mons.dof, mons.coef, mons.qty,
-                               disp, vel, acc, acc_prev, nf, out, float(blowup_m))
+    status = _moving_load_loop(model.packed, rail_mesh(model.packed, model.rail_head_height_m),
+                               arrays, state, rec, t_out, float(dt), n_steps, output_every,
+                               float(blowup_m))
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0
     if status >= 0:
@@ -183,9 +246,8 @@ def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=No
                 cpu_s_per_simulated_s=cpu / (n_steps * dt))
     log.info("simulated %.3f s (%d steps of %.3g s, %d DOF) in %.2f s wall (%.2f s per "
              "simulated s)", n_steps * dt, n_steps, dt, n, wall, info["wall_s_per_simulated_s"])
-    df = pd.DataFrame(out * np.concatenate([[1.0], mons.scale]),
-                      columns=["time_s"] + mons.names)
-    info["final_state"] = (disp, vel, acc)
+    df = pd.DataFrame(np.column_stack([t_out, rec.hist]), columns=["time_s"] + mons.names)
+    info["final_state"] = (state.disp, state.vel, state.acc)
     return df, info
 
 
@@ -193,5 +255,5 @@ def static_initial_acceleration(model, nodal_force: np.ndarray) -> np.ndarray:
     """M^-1 f at rest (helper for callers writing their own loop)."""
     acc = np.zeros(model.n_dof)
     z = np.zeros(model.n_dof)
-    _structure_accelerations(model.packed, z, z, nodal_force, acc)
+    structure_accelerations(model.packed, z, z, nodal_force, acc)
     return acc

@@ -94,13 +94,6 @@ def sweep_irregularity(config: Mapping[str, Any]) -> dict[str, Any]:
             "fade_in_m": irr["fade_in_m"], "seed": mean_spectrum_seed(int(config["study"]["seed"]))}
 
 
-def _n_spans(table: pd.DataFrame) -> int:
-    import re
-
-    return len({m.group(1) for c in table.columns
-                if (m := re.match(r"girder_span(\d+)_mid_z_acc_m_s2$", c))}) or 1
-
-
 def run_speed(config: Mapping[str, Any], speed_kmh: float) -> dict[str, float]:
     """One deterministic coupled run at ``speed_kmh``: the study's extremes (docs/studies.md §2)
     plus ``speed_kmh`` (nominal parameters, :func:`sweep_irregularity`)."""
@@ -113,7 +106,7 @@ def run_speed(config: Mapping[str, Any], speed_kmh: float) -> dict[str, float]:
         table, summary = run_coupled(case)
     except Exception as exc:
         raise RuntimeError(f"speed sweep: the run at {speed_kmh} km/h failed: {exc}") from exc
-    row = extremes_from_run(table, summary, sim, _n_spans(table))
+    row = extremes_from_run(summary)
     return {"speed_kmh": float(speed_kmh), **row}
 
 
@@ -250,7 +243,7 @@ def time_history_run(config: Mapping[str, Any], speed_kmh: float, *, car: int = 
               "bridge_start_m": float(model.spans[0].start_m),
               "bridge_end_m": float(model.spans[-1].start_m + model.spans[-1].length_m),
               "wheel": f"car{car}_ws{wheelset}", "speed_kmh": float(speed_kmh),
-              "max_wheel_load_N": float(summary["max_wheel_load_N"])}
+              "max_wheel_vertical_force_N": float(summary["max_wheel_vertical_force_N"])}
     return pd.DataFrame(out), layout
 
 

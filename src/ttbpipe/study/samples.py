@@ -4,8 +4,9 @@
 the sample's case from the study's structure, train and run settings (config ``structure:`` and
 ``simulation:``), its irregularity profile and its parameter-field factors, runs
 :func:`ttbpipe.simulation.coupled.run_coupled`, and reduces the run to one row of the extremes
-table and a block of the time-history table (docs/results_schema.md). It has no side effect
-outside a private temporary folder, so it runs the same in the batch loop and on a Dask worker.
+table and a block of the time-history table (docs/results_schema.md). The profile and the
+field factors go to the run in memory (no file between the design and the results); the function
+has no side effect, so it runs the same in the batch loop and on a Dask worker.
 """
 
 from __future__ import annotations
@@ -14,15 +15,14 @@ import copy
 import functools
 import json
 import logging
-import re
-import tempfile
-from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
 
 from ..configuration import section_defaults, validate_section
+from ..response_indices import PER_CAR, PER_SPAN
+from ..stats.schema import RESPONSE_INDICES
 from ..threads import pinned
 from .design import STREAM_ID, scenario_key
 
@@ -152,7 +152,8 @@ def build_case(sim: Mapping[str, Any], structure: Mapping[str, Any], *,
                ) -> dict[str, Any]:
     """Case configuration of :func:`run_coupled` from the study's simulation settings."""
     run = {"track": "structure", "speed_kmh": float(sim["speed_kmh"]),
-           "time_step_s": sim["time_step_s"], "output_interval_s": float(sim["output_interval_s"])}
+           "time_step_s": sim["time_step_s"], "output_interval_s": float(sim["output_interval_s"]),
+           "deck_filter_hz": float(sim["deck_filter_hz"])}
     if sim.get("end_x_m") is not None:
         run["end_x_m"] = float(sim["end_x_m"])
     case = {"structure": copy.deepcopy(dict(structure)), "train": copy.deepcopy(sim["train"]),
@@ -187,62 +188,25 @@ def _history_columns(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) 
     return wanted
 
 
-def _lowpass_peak(values: np.ndarray, dt: float, cutoff_hz: float) -> float:
-    """max |x| after a zero-phase 4th-order Butterworth low-pass at cutoff_hz (EN 1990 A2
-    A2.4.4.2.1: deck accelerations are checked for frequencies up to 30 Hz)."""
-    from scipy import signal
-
-    nyquist = 0.5 / dt
-    if cutoff_hz >= 0.95 * nyquist:
-        return float(np.max(np.abs(values)))
-    sos = signal.butter(4, cutoff_hz, fs=1.0 / dt, output="sos")
-    return float(np.max(np.abs(signal.sosfiltfilt(sos, values))))
-
-
-def extremes_from_run(table: pd.DataFrame, summary: Mapping[str, Any], sim: Mapping[str, Any],
-                      n_spans: int) -> dict[str, float]:
-    """Response indices of one run, named as in docs/results_schema.md (mapping table there)."""
+def extremes_from_run(summary: Mapping[str, Any]) -> dict[str, float]:
+    """One row of the extremes table from a run's summary: the context columns (train speed,
+    smallest static wheel load), every response index of the registry the run computed (same
+    names: ttbpipe.response_indices), the per-span and per-car indices, the contact-loss index."""
     out: dict[str, float] = {
         "train_speed_m_s": float(summary["speed_kmh"]) / 3.6,
         "static_wheel_load_N": float(min(min(v) for v in summary["static_wheel_load_N"].values())),
-        "max_derailment_coefficient": float(summary["max_derailment_coefficient"]),
-        "max_wheel_unloading_ratio": float(summary["max_wheel_unloading"]),
-        "max_lateral_wheelset_force_N": float(summary["max_wheelset_lateral_force_N"]),
-        "max_wheel_vertical_force_N": float(summary["max_wheel_load_N"]),
-        "max_wheel_lateral_force_N": float(summary["max_lateral_wheel_force_N"]),
-        "max_carbody_vertical_acc_m_s2": float(summary["max_carbody_vertical_acc_m_s2"]),
-        "max_carbody_lateral_acc_m_s2": float(summary["max_carbody_lateral_acc_m_s2"]),
-        # loss of wheel-rail contact, its own index (Q/P is defined in contact only)
-        "contact_loss_count": float(summary["contact_loss_count"]),
-        "contact_loss_total_duration_s": float(summary["contact_loss_total_s"]),
-        "contact_loss_max_duration_s": float(summary["contact_loss_max_s"]),
     }
-    sperling = summary["sperling"]
-    for direction in ("vertical", "lateral"):
-        per_car = {k: v for k, v in sperling.items() if k.endswith(f"_{direction}")}
-        out[f"sperling_{direction}"] = float(max(per_car.values()))
-        for key, value in sorted(per_car.items()):
-            out[f"sperling_{direction}_{key.split('_')[0]}"] = float(value)
-    peaks = summary.get("monitor_peaks", {})
-    dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
-    cutoff = float(sim["deck_filter_hz"])
-    for direction, axis in (("vertical", "z"), ("lateral", "y")):
-        deck = [c for c in table.columns if c.startswith("girder_span") and c.endswith(f"_mid_{axis}_acc_m_s2")]
-        rail = [k for k in peaks if k.startswith("rail_") and k.endswith(f"_{axis}_acc_m_s2")]
-        if deck:
-            out[f"max_deck_{direction}_acc_m_s2"] = max(
-                _lowpass_peak(table[c].to_numpy(float), dt_out, cutoff) for c in deck)
-        if rail:
-            out[f"max_rail_{direction}_acc_m_s2"] = float(max(peaks[k] for k in rail))
-    disp = [k for k in peaks if k.startswith("girder_span") and k.endswith("_z_disp_mm")]
-    if disp:
-        out["max_girder_vertical_disp_m"] = 1e-3 * float(max(peaks[k] for k in disp))
-    for s in range(1, n_spans + 1):
-        for axis, name in (("z", "vertical"), ("y", "lateral")):
-            col = f"girder_span{s}_mid_{axis}_acc_m_s2"
-            if col in table.columns:
-                out[f"max_span{s}_{name}_acc_m_s2"] = _lowpass_peak(table[col].to_numpy(float),
-                                                                   dt_out, cutoff)
+    for name in RESPONSE_INDICES:
+        if name in summary:
+            out[name] = float(summary[name])
+    n_cars = len(summary.get("sperling", {})) // 2
+    for car in range(1, n_cars + 1):
+        for pattern in PER_CAR:
+            out[pattern.format(car=car)] = float(summary[pattern.format(car=car)])
+    for span in range(1, int(summary.get("n_spans", 0)) + 1):
+        for pattern in PER_SPAN:
+            if pattern.format(span=span) in summary:
+                out[pattern.format(span=span)] = float(summary[pattern.format(span=span)])
     bad = {k: v for k, v in out.items() if not np.isfinite(v)}
     if bad:
         from ..simulation.diagnosis import explain
@@ -309,57 +273,44 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
     """
     kind, index = str(row["kind"]), int(row["sample_index"])
     irr_cfg = sim["irregularity"]
-    properties = None
-    with tempfile.TemporaryDirectory(prefix="ttbpipe_sample_") as tmp:
-        if kind == "irregularity_mc":
-            prof = mc_profile(profiles[kind], study_seed, int(row["profile_index"]), index)
-            prof["chainage_m"] = prof["chainage_m"] - prof["chainage_m"].iloc[0] - float(irr_cfg["lead_in_m"])
-            path = Path(tmp) / "profile.parquet"
-            prof.to_parquet(path)
-            irregularity = {"source": "file", "file": str(path), "fade_in_m": irr_cfg["fade_in_m"]}
-        elif kind in ("irregularity", "forecast"):
-            id_column = "sample_index" if kind == "irregularity" else "profile_index"
-            prof = read_profile(profiles[kind], id_column, int(row["profile_index"]))
-            # the profile's chainage starts lead_in_m behind x = 0 of the structure so that it
-            # covers the wheels of a train starting at the beginning of the rails
-            prof["chainage_m"] = prof["chainage_m"] - prof["chainage_m"].iloc[0] - float(irr_cfg["lead_in_m"])
-            path = Path(tmp) / "profile.parquet"
-            prof.to_parquet(path)
-            irregularity = {"source": "file", "file": str(path), "fade_in_m": irr_cfg["fade_in_m"]}
-        elif kind in ("fields", "fields_mc", "single"):
-            irregularity = {"source": "synthetic", "spectrum": irr_cfg["spectrum"],
-                            "dx_m": irr_cfg["dx_m"], "fade_in_m": irr_cfg["fade_in_m"],
-                            "seed": mean_spectrum_seed(study_seed)}
-        if kind in ("fields", "fields_mc"):
-            if fields is None:
-                raise ValueError("scenario fields needs the fields: section of the configuration")
-            factors = field_factors(fields, structure, study_seed, str(row["condition"]), index,
-                                    method="mc" if kind == "fields_mc" else None)
-            rows = [pd.DataFrame({"sample_index": index, "parameter": name,
-                                  "carrier_index": np.arange(v.size), "factor": v})
-                    for name, v in factors.items()]
-            path = Path(tmp) / "factors.parquet"
-            pd.concat(rows, ignore_index=True).to_parquet(path)
-            properties = {"field_samples": {"path": str(path), "sample_index": index}}
-        elif kind not in ("irregularity", "forecast", "single", "irregularity_mc"):
-            raise ValueError(f"design row {row['scenario']}/{index}: unknown kind {kind!r}")
-        case = build_case(sim, structure, irregularity=irregularity, properties=properties)
-        from ..simulation.coupled import run_coupled
+    track, factors = None, None
+    if kind == "irregularity_mc":
+        track = mc_profile(profiles[kind], study_seed, int(row["profile_index"]), index)
+    elif kind in ("irregularity", "forecast"):
+        id_column = "sample_index" if kind == "irregularity" else "profile_index"
+        track = read_profile(profiles[kind], id_column, int(row["profile_index"]))
+    elif kind not in ("fields", "fields_mc", "single"):
+        raise ValueError(f"design row {row['scenario']}/{index}: unknown kind {kind!r}")
+    if track is not None:
+        # the profile's chainage starts lead_in_m behind x = 0 of the structure so that it
+        # covers the wheels of a train starting at the beginning of the rails
+        track["chainage_m"] = track["chainage_m"] - track["chainage_m"].iloc[0] - float(irr_cfg["lead_in_m"])
+        irregularity = {"fade_in_m": irr_cfg["fade_in_m"]}
+    else:   # the single mean-spectrum irregularity of the fields and single scenarios
+        irregularity = {"source": "synthetic", "spectrum": irr_cfg["spectrum"],
+                        "dx_m": irr_cfg["dx_m"], "fade_in_m": irr_cfg["fade_in_m"],
+                        "seed": mean_spectrum_seed(study_seed)}
+    if kind in ("fields", "fields_mc"):
+        if fields is None:
+            raise ValueError("scenario fields needs the fields: section of the configuration")
+        factors = field_factors(fields, structure, study_seed, str(row["condition"]), index,
+                                method="mc" if kind == "fields_mc" else None)
+    case = build_case(sim, structure, irregularity=irregularity)
+    from ..simulation.coupled import run_coupled
 
-        try:
-            table, summary = run_coupled(case)
-        except Exception as exc:
-            source = (f" (irregularity profile {row['profile_index']} of {profiles[kind]}, "
-                      f"shifted to start {irr_cfg['lead_in_m']} m behind x = 0)"
-                      if kind in profiles and kind != "irregularity_mc" else
-                      f" (population section {row['profile_index']})" if kind == "irregularity_mc"
-                      else "")
-            raise RuntimeError(f"sample ({row['scenario']}, {index}){source} failed: {exc}") from exc
-    n_spans = len({m.group(1) for c in table.columns
-                   if (m := re.match(r"girder_span(\d+)_mid_z_acc_m_s2$", c))}) or 1
+    try:
+        table, summary = run_coupled(case, track=track, factors=factors)
+    except Exception as exc:
+        source = (f" (irregularity profile {row['profile_index']} of {profiles[kind]}, "
+                  f"shifted to start {irr_cfg['lead_in_m']} m behind x = 0)"
+                  if kind in profiles and kind != "irregularity_mc" else
+                  f" (population section {row['profile_index']})" if kind == "irregularity_mc"
+                  else "")
+        raise RuntimeError(f"sample ({row['scenario']}, {index}){source} failed: {exc}") from exc
+    n_spans = int(summary["n_spans"])
     keys = {"sample_index": index, "scenario": str(row["scenario"]), "weight": float(row["weight"]),
             "seed_entropy": str(row["seed_entropy"])}
-    extremes = {**keys, **extremes_from_run(table, summary, sim, n_spans)}
+    extremes = {**keys, **extremes_from_run(summary)}
     history = history_from_run(table, sim, n_spans)
     for k in ("weight", "scenario", "sample_index"):   # history key columns (results_schema.md)
         history.insert(0, k, keys[k])

@@ -5,8 +5,11 @@
 * :mod:`.contact` -- Hertz, contact geometry (conical or tabulated), Kalker, Shen-Hedrick-Elkins,
   flange contact;
 * :mod:`.kernels` -- numba kernels of the contact forces for the whole train;
-* :mod:`.static` -- gravity-loaded equilibrium (rigid track or coupled to the structure);
+* :mod:`.dynamics` -- the train's equations of motion for a time loop (rail kinematics in,
+  accelerations and wheel forces out);
+* :mod:`.static` -- gravity-loaded equilibrium of the train on given rail heights;
+* :mod:`.stability` -- the Zhai step limit of the suspension's own modes;
 * :mod:`.comfort` -- Sperling ride index.
 
-The coupled time loop is :func:`ttbpipe.simulation.coupled.run_coupled`. See docs/vehicle.md.
+The coupled run is :func:`ttbpipe.simulation.coupled.run_coupled`. See docs/vehicle.md.
 """

@@ -332,14 +332,12 @@ def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
 
 @njit(cache=True)
 def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: float,
-                   ws_y: float, ws_z: float, ws_roll: float, ws_yaw: float,
-                   ws_vy: float, ws_vz: float, ws_vroll: float, ws_vpitch: float, ws_vyaw: float,
-                   rail_z: float, rail_y: float, rail_vz: float, rail_vy: float,
-                   row: np.ndarray, out: np.ndarray, creep_y_prev: float = 0.0,
+                   wheelset, rail, row: np.ndarray, out: np.ndarray, creep_y_prev: float = 0.0,
                    creep_relax: float = 0.0) -> float:
     """Contact forces on one wheel (side +1 left, -1 right) in track axes.
 
-    ``rail_*`` are the rail-head displacement and velocity at the contact (structure plus
+    ``wheelset`` = (y, z, roll, yaw, dy/dt, dz/dt, droll/dt, dpitch/dt (spin), dyaw/dt) of the
+    wheelset; ``rail`` = (z, y, dz/dt, dy/dt) of the rail head at the contact (structure plus
     irregularity). Writes ``out``: [F_x, F_y, F_z, M_spin_z, N, y_rel, penetration] where F is
     the force of the rail on the wheel (contact + flange) and M_spin_z the spin moment about the
     contact normal. Kinematics (small angles): penetration
@@ -360,6 +358,8 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     """
     g_hertz, g_shear, e_mod, nu, mu, r0, a0, flange_gap, flange_k = (
         scal[0], scal[1], scal[2], scal[3], scal[4], scal[5], scal[6], scal[7], scal[8])
+    ws_y, ws_z, ws_roll, ws_yaw, ws_vy, ws_vz, ws_vroll, ws_vpitch, ws_vyaw = wheelset
+    rail_z, rail_y, rail_vz, rail_vy = rail
     y_rel = ws_y - rail_y
     _table_row(table, side * y_rel, row)
     radius, dz, delta = row[1], row[2], row[3]
@@ -413,9 +413,8 @@ def wheel_contact(side: float, geom: ContactGeometry, speed: float, ws: dict, ra
     """Python wrapper of :func:`_wheel_contact` for tests: ``ws``/``rail`` give the kinematics."""
     row = np.zeros(N_COLS)
     out = np.zeros(7)
-    _wheel_contact(side, geom.table, geom.scalars(), speed,
-                   ws.get("y", 0.0), ws.get("z", 0.0), ws.get("roll", 0.0), ws.get("yaw", 0.0),
-                   ws.get("vy", 0.0), ws.get("vz", 0.0), ws.get("vroll", 0.0), ws.get("vpitch", 0.0),
-                   ws.get("vyaw", 0.0), rail.get("z", 0.0), rail.get("y", 0.0), rail.get("vz", 0.0),
-                   rail.get("vy", 0.0), row, out)
+    wheelset = tuple(float(ws.get(k, 0.0)) for k in ("y", "z", "roll", "yaw", "vy", "vz", "vroll",
+                                                     "vpitch", "vyaw"))
+    rails = tuple(float(rail.get(k, 0.0)) for k in ("z", "y", "vz", "vy"))
+    _wheel_contact(side, geom.table, geom.scalars(), speed, wheelset, rails, row, out)
     return out

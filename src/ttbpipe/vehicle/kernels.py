@@ -1,4 +1,4 @@
-"""Numba kernels shared by the static solver and the coupled time loop (vehicle side).
+"""Numba kernels of the train's contact forces, shared by the static solver and the time loop.
 
 Layout conventions: see :mod:`ttbpipe.vehicle.model` (DOFs) and :mod:`ttbpipe.vehicle.contact`
 (geometry table, contact kinematics). Rail kinematics per wheel are packed as
@@ -19,7 +19,7 @@ N_WHEEL_OUT = 7
 
 
 @njit(cache=True)
-def _csr_matvec_sub(indptr, indices, data, x, out):
+def csr_matvec_sub(indptr, indices, data, x, out):
     """out -= A x for a CSR matrix A."""
     for i in range(indptr.shape[0] - 1):
         s = 0.0
@@ -31,19 +31,20 @@ def _csr_matvec_sub(indptr, indices, data, x, out):
 @njit(cache=True)
 def _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``
-    (explicit creep law; see :func:`_train_contact_relaxed`)."""
+    (explicit creep law; see :func:`train_contact`)."""
     creep_state = np.zeros((ws_dofs.shape[0], 2))
-    _train_contact_relaxed(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp,
-                           creep_state, 0.0)
+    train_contact(q, v, ws_dofs, (table, scal), speed, rail_kin, force, wheel,
+                  (row, tmp, creep_state), 0.0)
 
 
 @njit(cache=True)
-def _train_contact_relaxed(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp,
-                           creep_state, creep_relax):
+def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratch, creep_relax):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``.
 
-    ``creep_state[ws, side]``: semi-implicit lateral creepage of the previous step, updated in
-    place; ``creep_relax`` = m_eff^-1 dt / V (0: explicit law); see
+    ``geometry`` = (table, scalars) of the contact (ttbpipe.vehicle.contact); ``scratch`` =
+    (row, tmp, creep_state): a geometry-table row, the wheel's output row, and
+    ``creep_state[ws, side]``, the semi-implicit lateral creepage of the previous step, updated
+    in place; ``creep_relax`` = m_eff^-1 dt / V (0: explicit law); see
     :func:`ttbpipe.vehicle.contact._wheel_contact`.
 
     A contact at (0, s a0, -r) from the wheelset centre with force (F_x, F_y, F_z) and spin moment
@@ -51,6 +52,8 @@ def _train_contact_relaxed(q, v, ws_dofs, table, scal, speed, rail_kin, force, w
     += -r F_x, yaw += -s a0 F_x + M cos(delta) (r x F, small angles). The rolling radius r and
     contact angle come from the geometry table at the wheel's relative lateral position.
     """
+    table, scal = geometry
+    row, tmp, creep_state = scratch
     a0 = scal[6]
     n_ws = ws_dofs.shape[0]
     for w in range(n_ws):
@@ -63,8 +66,8 @@ def _train_contact_relaxed(q, v, ws_dofs, table, scal, speed, rail_kin, force, w
             side = 1.0 if k == 0 else -1.0
             creep_state[w, k] = _wheel_contact(
                 side, table, scal, speed,
-                q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip], v[iw],
-                rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3],
+                (q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip], v[iw]),
+                (rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3]),
                 row, tmp, creep_state[w, k], creep_relax)
             fx = tmp[0]
             fy = tmp[1]

@@ -1,12 +1,12 @@
 """Zhai step limit of the vehicle's own modes: suspension plus linearised wheel-rail contact.
 
-The contact limit (:func:`ttbpipe.simulation.coupled.contact_time_step_limit`) bounds the Hertz
+The contact limit (:func:`ttbpipe.timestepping.limits.contact_time_step_limit`) bounds the Hertz
 mode of half a wheelset and the creep dampers one at a time; it misses the suspension. A light
 body on stiff springs or strong dampers (bogie pitch inertia 1 kg m^2 with the default primary
 dampers: c/I = 2.5e5 1/s; primary vertical stiffness 5e8 N/m on top of the Hertz springs) has
 modes that diverge at steps both checks accept. This module builds the linear system the loop
 integrates explicitly, per car, with the rail fixed, and finds the largest stable Zhai step of
-it with :func:`ttbpipe.structure.integrator.zhai_critical_time_step` (spectral radius of the
+it with :func:`ttbpipe.timestepping.zhai.zhai_critical_time_step` (spectral radius of the
 one-step amplification matrix <= 1; validated in tests against the closed form of one damped
 oscillator and against runs of the diverging cars).
 
@@ -91,14 +91,14 @@ def vehicle_time_step_limit(model: TrainModel, geom: ContactGeometry, speed: flo
     """Largest stable Zhai step of every car's linear system (module docstring).
 
     Returns dt_vehicle_limit_s (spectral radius <= 1), dt_vehicle_s (times
-    :data:`VEHICLE_SAFETY`, the step :func:`ttbpipe.simulation.coupled.prepare` enforces) and
+    :data:`VEHICLE_SAFETY`, the step :func:`ttbpipe.simulation.setup.prepare` enforces) and
     vehicle_mode, the DOF dominating the first mode to diverge (e.g. ``car1_bogie1_pitch``).
     Cached per (train parameters, speed, lateral creep law): every sample of a study shares it.
     """
     key = (repr(model.params), float(speed), str(lateral_creep))
     if key in _CACHE:
         return dict(_CACHE[key])
-    from ..structure.integrator import zhai_critical_time_step
+    from ..timestepping.zhai import zhai_critical_time_step
 
     t0 = time.perf_counter()
     labels = dof_labels(model.params.n_cars)
@@ -126,7 +126,7 @@ def vehicle_step_is_stable(model: TrainModel, geom: ContactGeometry, speed: floa
                            lateral_creep: str = "semi_implicit") -> bool:
     """One spectral-radius check of every distinct car at step ``dt`` (no bisection; cached
     like :func:`vehicle_time_step_limit`)."""
-    from ..structure.integrator import SPECTRAL_RADIUS_TOL, zhai_spectral_radius
+    from ..timestepping.zhai import SPECTRAL_RADIUS_TOL, zhai_spectral_radius
 
     key = ("step", repr(model.params), float(speed), str(lateral_creep), float(dt))
     if key in _CACHE:

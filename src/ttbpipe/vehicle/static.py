@@ -9,10 +9,9 @@ about each axle: steady rolling). Couplers are excluded (they are made stress-fr
 the static state: the time loop adds the constant preload K_coupler q_static, which is the
 equivalent of adjusting the coupler heads to the static car heights).
 
-Structure: K u = f with the structure's global K (``StructureModel.matrices()``, assembled from
-the arrays its kernels use), fixed DOFs held at 0. The train-structure equilibrium is a fixed-point iteration between
-the two (the rails are ~100x stiffer than the primary suspension, so it converges in a few
-iterations); it stops when the wheel loads change by less than ``tol_load`` N.
+The structure's static solve is :class:`ttbpipe.structure.static.StructureStatic`; the
+train-structure fixed point between the two is the coupled set-up's
+(:func:`ttbpipe.simulation.setup.static_equilibrium`).
 """
 
 from __future__ import annotations
@@ -141,27 +140,3 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
     raise RuntimeError(f"static equilibrium: Newton did not converge in {max_iter} iterations "
                        f"(last step {np.max(np.abs(step)):.3g}); check the contact parameters "
                        "(Hertz G, wheel loads) or raise max_iter")
-
-
-class StructureStatic:
-    """Static solves K u = f of the linear structure (free DOFs; factorised once).
-
-    K comes from the structure owner's ``StructureModel.matrices()``, which assembles the same
-    packed arrays the explicit kernels use, so the static state is the rest state of the time
-    loop (no initial transient).
-    """
-
-    def __init__(self, structure_model):
-        _, k_glob, _ = structure_model.matrices()
-        self.n = structure_model.n_dof
-        self.free = ~np.asarray(structure_model.fixed, dtype=bool)
-        self._lu = spla.splu(k_glob.tocsr()[self.free][:, self.free].tocsc())
-
-    def solve(self, nodal_force: np.ndarray) -> np.ndarray:
-        """Displacements u with K u = f (u = 0 on fixed DOFs)."""
-        u = np.zeros(self.n)
-        u[self.free] = self._lu.solve(np.asarray(nodal_force, dtype=float)[self.free])
-        if not np.all(np.isfinite(u)):
-            raise RuntimeError("structure static solve gave non-finite displacements: the structure "
-                               "has an unsupported mechanism; check its boundary conditions")
-        return u

@@ -1,4 +1,11 @@
-"""Run a moving-load case on the structure: config dict -> (monitor table, summary)."""
+"""Random per-element properties of a case: the ``properties:`` section -> factors per carrier.
+
+Either one sample of the fields stage (``field_samples``: a table written by
+``ttbpipe.fields``) or independent lognormal factors per carrier (``independent``: mean 1, seeded
+by (seed, sample_index)); :func:`ttbpipe.structure.apply_factors` multiplies them into the
+structure's per-element properties. A study hands its field factors over in memory instead
+(``run_coupled(..., factors=...)``).
+"""
 
 from __future__ import annotations
 
@@ -6,12 +13,8 @@ import logging
 from typing import Any, Mapping
 
 import numpy as np
-import pandas as pd
 
-from ..structure import apply_factors, build_structure, carrier_positions
-from ..structure.assembly import CARRIER_PARAMETERS, PARAMETER_CARRIER
-from ..structure.moving_loads import build_loads, default_duration, simulate
-from ..threads import pinned
+from .assembly import CARRIER_PARAMETERS, PARAMETER_CARRIER, carrier_positions
 
 log = logging.getLogger(__name__)
 
@@ -48,27 +51,3 @@ def property_factors(props_cfg: Mapping[str, Any] | None, model) -> dict[str, np
                              f"{PARAMETER_CARRIER[p]} carriers; sample the fields at "
                              "ttbpipe.structure.carrier_positions(model)")
     return factors
-
-
-@pinned
-def run_moving_loads(case: Mapping[str, Any]) -> tuple[pd.DataFrame, dict]:
-    """Build the structure, apply property factors, run the moving loads; (table, summary)."""
-    model = build_structure(case.get("structure") or {})
-    factors = property_factors(case.get("properties"), model)
-    if factors:
-        model = apply_factors(model, factors)
-    loads = build_loads(case["loads"], model)
-    sim = dict(case.get("simulation") or {})
-    dt = sim.get("time_step_s", 1.0e-4)
-    if dt == "auto":
-        dt = model.stable_time_step()
-    duration = float(sim.get("duration_s") or default_duration(model, loads))
-    table, info = simulate(model, loads, float(dt), duration, case.get("monitors"),
-                           output_every=int(sim.get("output_every", 10)),
-                           check_dt=bool(sim.get("check_time_step", True)))
-    summary = {"n_dof": info["n_dof"], "n_steps": info["n_steps"], "time_step_s": info["dt_s"],
-               "duration_s": duration, "n_loads": loads.n, "wall_s": info["wall_s"],
-               "factored_parameters": sorted(factors)}
-    if "stability" in info:
-        summary["stable_time_step_limit_s"] = float(info["stability"]["dt_limit_s"])
-    return table, summary

@@ -1,0 +1,235 @@
+"""Results of a coupled run: the time-history table, the response indices, the summary.
+
+* :func:`results_table`: time histories at the output steps: per wheel P, Q, the contact flag,
+  Q/P and the unloading ratio; per wheelset H and the lateral displacement; car-body floor
+  accelerations; every structure monitor (column names carry units).
+* :func:`response_indices`: every index of the registry (:mod:`ttbpipe.response_indices`),
+  named as the study's extremes table and the results schema name it, plus the per-span deck and
+  per-car Sperling indices. Peaks of forces are taken at every time step (the recorders);
+  deck accelerations are low-passed at ``deck_filter_hz`` (EN 1990 A2 A2.4.4.2.1) on the output
+  histories; rail accelerations and girder displacements are peaks over every step.
+* :func:`summarise`: the indices plus what the run did (step, limits, static state, contact
+  loss, Sperling per car, monitor peaks), flat: the index names are keys of the summary.
+* :func:`check_finite`: nothing non-finite leaves a run.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from ..response_indices import PER_CAR, PER_SPAN
+from ..vehicle.comfort import sperling_index
+from ..vehicle.model import DOF_PER_CAR, PITCH, YAW, Y, Z
+from .setup import CoupledSetup, diagnosis_limits, wheel_labels
+
+log = logging.getLogger(__name__)
+
+CARBODY_POINTS = ("front", "centre", "rear")
+#: Default low-pass of the deck accelerations (EN 1990 A2 A2.4.4.2.1: deck accelerations are
+#: checked for frequencies up to 30 Hz).
+DECK_FILTER_HZ = 30.0
+
+
+def carbody_accelerations(setup: CoupledSetup, a_hist: np.ndarray) -> dict[str, np.ndarray]:
+    """Car-body floor accelerations (vertical, lateral) above the bogie pivots and at the centre.
+
+    At a point x_p from the car centre (rigid body, small rotations): a_z = z'' - x_p pitch'',
+    a_y = y'' + x_p yaw'' (model.point_row), at the car's centre-of-gravity height.
+    """
+    out = {}
+    for ci, car in enumerate(setup.train.cars):
+        base = DOF_PER_CAR * ci
+        for name, xp in zip(CARBODY_POINTS, (car.bogie_half_spacing, 0.0, -car.bogie_half_spacing)):
+            out[f"car{ci + 1}_body_{name}_az_m_s2"] = a_hist[:, base + Z] - xp * a_hist[:, base + PITCH]
+            out[f"car{ci + 1}_body_{name}_ay_m_s2"] = a_hist[:, base + Y] + xp * a_hist[:, base + YAW]
+    return out
+
+
+def results_table(setup: CoupledSetup, raw) -> pd.DataFrame:
+    """Time histories: wheel forces, contact flag, Q/P, unloading, H, car-body accelerations,
+    monitors.
+
+    ``<wheel>_in_contact`` (int8, 1/0): normal force N > 0 and P > 0 at that output step. Q/P is
+    defined in contact only: |Q|/P there and 0 where the wheel is off the rail (a lifted wheel
+    with a flange force would give |Q|/0); the unloading (P0 - P)/P0 is 1 there. The loss of
+    contact itself is its own index (summary ``contact_loss_*``).
+    """
+    m = setup.model
+    labels = wheel_labels(m)
+    p0 = setup.static_wheel[:, :, 2]
+    train = raw.train
+    cols: dict[str, np.ndarray] = {"time_s": train.t_out,
+                                   "x_lead_m": setup.x_lead0 + setup.speed * train.t_out}
+    for w, lab in enumerate(labels):
+        for k, side in enumerate(("left", "right")):
+            p = train.wheel_hist[:, w, k, 2]
+            qf = train.wheel_hist[:, w, k, 1]
+            contact = (train.wheel_hist[:, w, k, 4] > 0.0) & (p > 0.0)
+            cols[f"{lab}_{side}_P_N"] = p
+            cols[f"{lab}_{side}_Q_N"] = qf
+            cols[f"{lab}_{side}_in_contact"] = contact.astype(np.int8)
+            cols[f"{lab}_{side}_QP"] = np.where(contact, np.abs(qf) / np.where(contact, p, 1.0), 0.0)
+            cols[f"{lab}_{side}_unloading"] = (p0[w, k] - p) / p0[w, k]
+        cols[f"{lab}_H_N"] = train.wheel_hist[:, w, 0, 1] + train.wheel_hist[:, w, 1, 1]
+        cols[f"{lab}_y_mm"] = 1e3 * train.q_hist[:, m.wheelset_dofs[w, Y]]
+    cols.update(carbody_accelerations(setup, train.a_hist))
+    if setup.monitors is not None:
+        for i, name in enumerate(setup.monitors.names):
+            cols[name] = raw.monitors.hist[:, i]
+    return pd.DataFrame(cols)
+
+
+def lowpass_peak(values: np.ndarray, dt: float, cutoff_hz: float) -> float:
+    """max |x| after a zero-phase 4th-order Butterworth low-pass at cutoff_hz (scipy
+    ``sosfiltfilt``); the raw max when the cutoff is at or above 0.95 of the Nyquist frequency."""
+    from scipy import signal
+
+    nyquist = 0.5 / dt
+    if cutoff_hz >= 0.95 * nyquist:
+        return float(np.max(np.abs(values)))
+    sos = signal.butter(4, cutoff_hz, fs=1.0 / dt, output="sos")
+    return float(np.max(np.abs(signal.sosfiltfilt(sos, values))))
+
+
+def _sperling_per_car(setup: CoupledSetup, table: pd.DataFrame) -> dict[str, float]:
+    dt_out = setup.dt * setup.out_every
+    record_s = len(table) * dt_out
+    if record_s < 5.0:
+        log.warning("Sperling indices from a %.2f s record (shorter than the 5 s window of the "
+                    "standard): each evaluated as one window", record_s)
+    sperling = {}
+    for ci in range(setup.train.n_cars):
+        for direction, key in (("vertical", "az"), ("lateral", "ay")):
+            vals = [sperling_index(table[f"car{ci + 1}_body_{p}_{key}_m_s2"].to_numpy(), dt_out,
+                                   direction, quiet=True)[0] for p in CARBODY_POINTS]
+            sperling[f"car{ci + 1}_{direction}"] = float(max(vals))
+    return sperling
+
+
+def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
+                     deck_filter_hz: float = DECK_FILTER_HZ) -> dict[str, float]:
+    """Every response index of the run, by its registry name (module docstring), and the
+    per-span deck and per-car Sperling indices."""
+    p0 = setup.static_wheel[:, :, 2]
+    peak = raw.train.wheel_peak
+    out: dict[str, float] = {
+        "max_derailment_coefficient": float(peak[:, :, 3].max()),
+        "max_wheel_unloading_ratio": float(((p0 - peak[:, :, 1]) / p0).max()),
+        "max_lateral_wheelset_force_N": float(raw.train.h_peak.max()),
+        "max_wheel_vertical_force_N": float(peak[:, :, 0].max()),
+        "max_wheel_lateral_force_N": float(peak[:, :, 2].max()),
+        "max_carbody_vertical_acc_m_s2": float(max(
+            np.abs(table[c]).max() for c in table.columns if c.endswith("_az_m_s2"))),
+        "max_carbody_lateral_acc_m_s2": float(max(
+            np.abs(table[c]).max() for c in table.columns if c.endswith("_ay_m_s2"))),
+    }
+    from .diagnosis import contact_loss_stats
+
+    loss = contact_loss_stats(raw.train.contact_loss, setup.dt,
+                              setup.x_lead0 + setup.model.wheelset_x, setup.speed,
+                              wheel_labels(setup.model))
+    out["contact_loss_count"] = float(loss["contact_loss_count"])
+    out["contact_loss_total_duration_s"] = float(loss["contact_loss_total_s"])
+    out["contact_loss_max_duration_s"] = float(loss["contact_loss_max_s"])
+    sperling = _sperling_per_car(setup, table)
+    for direction in ("vertical", "lateral"):
+        per_car = {k: v for k, v in sperling.items() if k.endswith(f"_{direction}")}
+        out[f"sperling_{direction}"] = float(max(per_car.values()))
+    if setup.monitors is not None:
+        peaks = {name: float(raw.monitors.peak[i]) for i, name in enumerate(setup.monitors.names)}
+        dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
+        for direction, axis in (("vertical", "z"), ("lateral", "y")):
+            deck = [c for c in table.columns
+                    if c.startswith("girder_span") and c.endswith(f"_mid_{axis}_acc_m_s2")]
+            rail = [k for k in peaks if k.startswith("rail_") and k.endswith(f"_{axis}_acc_m_s2")]
+            if deck:
+                out[f"max_deck_{direction}_acc_m_s2"] = max(
+                    lowpass_peak(table[c].to_numpy(float), dt_out, deck_filter_hz) for c in deck)
+            if rail:
+                out[f"max_rail_{direction}_acc_m_s2"] = float(max(peaks[k] for k in rail))
+        disp = [k for k in peaks if k.startswith("girder_span") and k.endswith("_z_disp_mm")]
+        if disp:
+            out["max_girder_vertical_disp_m"] = 1e-3 * float(max(peaks[k] for k in disp))
+    for key, value in sorted(sperling.items()):
+        car, direction = key.split("_")
+        out[PER_CAR[0 if direction == "vertical" else 1].format(car=car[3:])] = float(value)
+    if setup.monitors is not None:
+        dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
+        for s in range(1, setup.n_spans + 1):
+            for axis, name in zip(("z", "y"), PER_SPAN):
+                col = f"girder_span{s}_mid_{axis}_acc_m_s2"
+                if col in table.columns:
+                    out[name.format(span=s)] = lowpass_peak(table[col].to_numpy(float), dt_out,
+                                                            deck_filter_hz)
+    return out
+
+
+def summarise(setup: CoupledSetup, raw, table: pd.DataFrame,
+              deck_filter_hz: float = DECK_FILTER_HZ) -> dict:
+    """The run's response indices (registry names, flat) and what the run did."""
+    m = setup.model
+    labels = wheel_labels(m)
+    p0 = setup.static_wheel[:, :, 2]
+    dt_out = setup.dt * setup.out_every
+    summary: dict[str, Any] = {
+        "speed_kmh": setup.speed * 3.6, "time_step_s": setup.dt, "n_steps": setup.n_steps,
+        "simulated_s": setup.n_steps * setup.dt, "wall_s": raw.wall_s,
+        "wall_s_per_simulated_s": raw.wall_s / (setup.n_steps * setup.dt),
+        "dt_limits": setup.dt_limits, "static_iterations": setup.static_iterations,
+        "n_spans": setup.n_spans,
+        "static_wheel_load_N": {lab: p0[w].tolist() for w, lab in enumerate(labels)},
+        "min_wheel_vertical_force_N": float(raw.train.wheel_peak[:, :, 1].min()),
+        "contact": setup.geom.description,
+        "irregularity": dict(setup.irregularity_info),
+        "deck_filter_hz": float(deck_filter_hz),
+    }
+    from .diagnosis import contact_loss_stats
+    summary.update(contact_loss_stats(raw.train.contact_loss, setup.dt,
+                                      setup.x_lead0 + m.wheelset_x, setup.speed, labels))
+    if setup.monitors is not None:
+        summary["monitor_peaks"] = {name: float(raw.monitors.peak[i])
+                                    for i, name in enumerate(setup.monitors.names)}
+    summary["sperling_record_s"] = len(table) * dt_out
+    summary["sperling"] = _sperling_per_car(setup, table)
+    summary.update(response_indices(setup, raw, table, deck_filter_hz))
+    return summary
+
+
+def _nonfinite_entries(summary: Mapping[str, Any], prefix: str = "") -> list[str]:
+    bad = []
+    for key, value in summary.items():
+        if isinstance(value, Mapping):
+            bad += _nonfinite_entries(value, f"{prefix}{key}.")
+        elif isinstance(value, (float, np.floating)) and not np.isfinite(value):
+            bad.append(f"{prefix}{key}")
+    return bad
+
+
+def check_finite(setup: CoupledSetup, table: pd.DataFrame, summary: dict) -> None:
+    """Raise ValueError naming the column(s) and summary key(s) with a non-finite value and the
+    likely cause (:func:`ttbpipe.simulation.diagnosis.explain`): nothing non-finite reaches a
+    results table."""
+    values = table.to_numpy(dtype=float)
+    bad_rows = ~np.isfinite(values)
+    columns = [c for c, b in zip(table.columns, bad_rows.any(axis=0)) if b]
+    keys = _nonfinite_entries(summary)
+    if not columns and not keys:
+        return
+    from .diagnosis import explain
+    where = ""
+    if columns:
+        row = int(np.flatnonzero(bad_rows.any(axis=1))[0])
+        where = (f" (first at t = {table['time_s'].iloc[row]:.4f} s, leading wheelset at x = "
+                 f"{table['x_lead_m'].iloc[row]:.1f} m)")
+    loss = {k: v for k, v in summary.items() if k.startswith("contact_loss")}
+    _, text = explain(setup.dt, diagnosis_limits(setup), setup.irregularity_info, loss,
+                      setup.irregularity_config, setup.speed, propose_auto=setup.propose_auto)
+    raise ValueError(f"non-finite values in the coupled run's results: column(s) {columns[:8]}"
+                     f"{' ...' if len(columns) > 8 else ''} ({len(columns)} in all){where}, "
+                     f"summary key(s) {keys}; the loop only stops on a non-finite vehicle or "
+                     f"structure state, so this is a defect of the post-processing or of an "
+                     f"input; {text}")

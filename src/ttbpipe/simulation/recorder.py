@@ -1,0 +1,112 @@
+"""What the coupled loop records of the train: peaks and contact loss at every step, histories at
+output steps.
+
+The structure's monitors are recorded by the recorder the structure's own loops use
+(:func:`ttbpipe.structure.monitors.record_monitors`); this module adds the train:
+
+* at every step: per wheel the largest and smallest vertical force F_z, the largest |F_y|, the
+  largest Q/P = |F_y|/F_z over the steps in contact (Q/P is defined in contact only), per
+  wheelset the largest |F_y,left + F_y,right| (H), and the loss of wheel-rail contact (normal
+  force N = 0): events, steps without contact, the longest event and where it started;
+* at output steps: the wheel forces (F_x, F_y, F_z, y_rel, N) and the vehicle's displacements and
+  accelerations.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+#: Train records of a run with ``n_out`` output rows (see :func:`train_recorder`):
+#: t_out[row]; wheel_hist[row, ws, side] = (F_x, F_y, F_z, y_rel, N); q_hist, a_hist[row, dof];
+#: wheel_peak[ws, side] = (max F_z, min F_z, max |F_y|, max Q/P in contact); h_peak[ws];
+#: contact_loss[ws, side] = (events, steps without contact, longest event, its first step, first
+#: step of the event under way or -1, first step of the first event or -1), in steps (step s is
+#: the state at t = s dt, so an event of k steps lasts k dt).
+TrainRecorder = namedtuple("TrainRecorder", ["t_out", "wheel_hist", "q_hist", "a_hist",
+                                             "wheel_peak", "h_peak", "contact_loss"])
+
+#: Columns of wheel_hist.
+WHEEL_HISTORY_COLUMNS = ("F_x", "F_y", "F_z", "y_rel", "N")
+
+
+def train_recorder(n_out: int, n_wheelsets: int, n_dof: int) -> TrainRecorder:
+    """Empty records (peaks at their neutral values, no contact loss)."""
+    wheel_peak = np.zeros((n_wheelsets, 2, 4))
+    wheel_peak[:, :, 1] = np.inf
+    contact_loss = np.zeros((n_wheelsets, 2, 6), dtype=np.int64)
+    contact_loss[:, :, 3:] = -1
+    return TrainRecorder(np.zeros(n_out), np.zeros((n_out, n_wheelsets, 2, 5)),
+                         np.zeros((n_out, n_dof)), np.zeros((n_out, n_dof)), wheel_peak,
+                         np.zeros(n_wheelsets), contact_loss)
+
+
+@njit(cache=True)
+def record_wheel_step(rec, wheel, step):
+    """Peaks and contact loss of one step (module docstring); returns the number of wheels in
+    contact."""
+    wheel_peak, contact_loss = rec.wheel_peak, rec.contact_loss
+    in_contact = 0
+    for w in range(wheel.shape[0]):
+        h = 0.0
+        for k in range(2):
+            fz = wheel[w, k, 2]
+            fy = wheel[w, k, 1]
+            h += fy
+            if fz > wheel_peak[w, k, 0]:
+                wheel_peak[w, k, 0] = fz
+            if fz < wheel_peak[w, k, 1]:
+                wheel_peak[w, k, 1] = fz
+            if abs(fy) > wheel_peak[w, k, 2]:
+                wheel_peak[w, k, 2] = abs(fy)
+            if wheel[w, k, 4] > 0.0:
+                in_contact += 1
+                contact_loss[w, k, 4] = -1
+                if fz > 0.0:   # Q/P is defined in contact only
+                    qp = abs(fy) / fz
+                    if qp > wheel_peak[w, k, 3]:
+                        wheel_peak[w, k, 3] = qp
+            else:
+                if contact_loss[w, k, 4] < 0:
+                    contact_loss[w, k, 0] += 1
+                    contact_loss[w, k, 4] = step
+                    if contact_loss[w, k, 5] < 0:
+                        contact_loss[w, k, 5] = step
+                contact_loss[w, k, 1] += 1
+                run = step - contact_loss[w, k, 4] + 1
+                if run > contact_loss[w, k, 2]:
+                    contact_loss[w, k, 2] = run
+                    contact_loss[w, k, 3] = contact_loss[w, k, 4]
+        if abs(h) > rec.h_peak[w]:
+            rec.h_peak[w] = abs(h)
+    return in_contact
+
+
+@njit(cache=True)
+def record_vehicle_output(rec, row, t, q, a):
+    """The vehicle's displacements and accelerations of one output step; returns (finite, the
+    largest |displacement|), for the loop's divergence checks."""
+    rec.t_out[row] = t
+    big = 0.0
+    for i in range(q.shape[0]):
+        rec.q_hist[row, i] = q[i]
+        rec.a_hist[row, i] = a[i]
+        if not np.isfinite(q[i]) or not np.isfinite(a[i]):
+            return False, big
+        if abs(q[i]) > big:
+            big = abs(q[i])
+    return True, big
+
+
+@njit(cache=True)
+def record_wheel_output(rec, row, wheel):
+    """The wheel forces of one output step (:data:`WHEEL_HISTORY_COLUMNS`)."""
+    for w in range(wheel.shape[0]):
+        for k in range(2):
+            rec.wheel_hist[row, w, k, 0] = wheel[w, k, 0]
+            rec.wheel_hist[row, w, k, 1] = wheel[w, k, 1]
+            rec.wheel_hist[row, w, k, 2] = wheel[w, k, 2]
+            rec.wheel_hist[row, w, k, 3] = wheel[w, k, 5]
+            rec.wheel_hist[row, w, k, 4] = wheel[w, k, 4]

@@ -1,0 +1,73 @@
+"""The train's equations of motion as a time loop evaluates them: rail kinematics in, wheel forces
+and vehicle accelerations out.
+
+M a = f_const + f_contact(q, v, rail) - K q - C v, with M diagonal (35 DOF per car,
+:mod:`ttbpipe.vehicle.model`), K and C the suspension and coupler matrices (CSR), f_const the
+gravity loads plus the coupler preload of the static state, and f_contact the wheel-rail contact
+forces of every wheel (:func:`ttbpipe.vehicle.kernels.train_contact`). A loop hands over the rail
+kinematics at every wheel, ``rail_kin[ws, side] = (z, dz/dt, y, dy/dt)`` of the rail head
+(structure plus irregularity), and gets back the accelerations and the wheel table
+``wheel[ws, side] = (F_x, F_y, F_z, M_spin, N, y_rel, penetration)`` (forces of the rail on the
+wheel, track axes), whose negatives it applies to the rails.
+
+:class:`VehicleArrays` groups what the kernel needs; :func:`vehicle_arrays` builds it from a
+:class:`~ttbpipe.vehicle.model.TrainModel`.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from .kernels import N_WHEEL_OUT, csr_matvec_sub, train_contact
+
+#: The train for a time loop: diagonal inverse mass, suspension stiffness and damping (CSR
+#: pointer, column, value), constant loads, the wheelsets' DOFs (ws, (y, z, roll, spin, yaw)) and
+#: their x at t = 0, the contact geometry table and scalars (ttbpipe.vehicle.contact).
+VehicleArrays = namedtuple("VehicleArrays", [
+    "inv_mass", "k_ptr", "k_idx", "k_val", "c_ptr", "c_idx", "c_val", "f_const", "ws_dofs",
+    "ws_x0", "table", "scal"])
+
+#: Work arrays of :func:`vehicle_accelerations`: the generalised force, the wheel table, the
+#: contact kernel's scratch rows, the semi-implicit lateral creep state per wheel.
+VehicleWork = namedtuple("VehicleWork", ["force", "wheel", "row", "tmp", "creep_state"])
+
+
+def vehicle_arrays(model, geom, f_const: np.ndarray, x_lead0: float) -> VehicleArrays:
+    """:class:`VehicleArrays` of a train model, its contact geometry and constant loads, with
+    the leading wheelset at ``x_lead0`` at t = 0."""
+    k, c = model.stiffness, model.damping
+    return VehicleArrays(
+        1.0 / model.mass, k.indptr.astype(np.int64), k.indices.astype(np.int64), k.data,
+        c.indptr.astype(np.int64), c.indices.astype(np.int64), c.data,
+        np.asarray(f_const, dtype=float), model.wheelset_dofs,
+        x_lead0 + np.asarray(model.wheelset_x, dtype=float), geom.table, geom.scalars())
+
+
+def vehicle_work(vehicle: VehicleArrays) -> VehicleWork:
+    """Fresh work arrays for :func:`vehicle_accelerations`."""
+    from .contact import N_COLS
+
+    n_ws = vehicle.ws_dofs.shape[0]
+    return VehicleWork(np.zeros(vehicle.inv_mass.shape[0]), np.zeros((n_ws, 2, N_WHEEL_OUT)),
+                       np.zeros(N_COLS), np.zeros(N_WHEEL_OUT), np.zeros((n_ws, 2)))
+
+
+@njit(cache=True)
+def vehicle_accelerations(vehicle, work, q, v, rail_kin, speed, creep_relax, a):
+    """a = M^-1 (f_const + f_contact - K q - C v); ``work.wheel`` holds the wheel table.
+
+    ``creep_relax`` = m_eff^-1 dt / V of the semi-implicit lateral creep (0: the explicit law),
+    whose state ``work.creep_state`` is updated in place (ttbpipe.vehicle.contact).
+    """
+    f = work.force
+    for i in range(f.shape[0]):
+        f[i] = vehicle.f_const[i]
+    train_contact(q, v, vehicle.ws_dofs, (vehicle.table, vehicle.scal), speed, rail_kin, f,
+                  work.wheel, (work.row, work.tmp, work.creep_state), creep_relax)
+    csr_matvec_sub(vehicle.k_ptr, vehicle.k_idx, vehicle.k_val, q, f)
+    csr_matvec_sub(vehicle.c_ptr, vehicle.c_idx, vehicle.c_val, v, f)
+    for i in range(f.shape[0]):
+        a[i] = f[i] * vehicle.inv_mass[i]
