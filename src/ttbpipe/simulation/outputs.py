@@ -24,6 +24,7 @@ import pandas as pd
 from ..response_indices import PER_CAR, PER_SPAN
 from ..vehicle.comfort import sperling_index
 from ..vehicle.model import DOF_PER_CAR, PITCH, YAW, Y, Z
+from .recorder import derailment_coefficients
 from .setup import CoupledSetup, diagnosis_limits, wheel_labels
 
 log = logging.getLogger(__name__)
@@ -72,7 +73,7 @@ def results_table(setup: CoupledSetup, raw) -> pd.DataFrame:
             cols[f"{lab}_{side}_P_N"] = p
             cols[f"{lab}_{side}_Q_N"] = qf
             cols[f"{lab}_{side}_in_contact"] = contact.astype(np.int8)
-            cols[f"{lab}_{side}_QP"] = np.where(contact, np.abs(qf) / np.where(contact, p, 1.0), 0.0)
+            cols[f"{lab}_{side}_QP"] = derailment_coefficients(qf, p, contact)
             cols[f"{lab}_{side}_unloading"] = (p0[w, k] - p) / p0[w, k]
         cols[f"{lab}_H_N"] = train.wheel_hist[:, w, 0, 1] + train.wheel_hist[:, w, 1, 1]
         cols[f"{lab}_y_mm"] = 1e3 * train.q_hist[:, m.wheelset_dofs[w, Y]]

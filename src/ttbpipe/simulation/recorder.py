@@ -44,6 +44,25 @@ def train_recorder(n_out: int, n_wheelsets: int, n_dof: int) -> TrainRecorder:
 
 
 @njit(cache=True)
+def derailment_coefficient(lateral_force, vertical_force, in_contact):
+    """Q/P = |lateral| / vertical wheel-rail force, defined in contact only (0 off the rail: a
+    lifted wheel with a flange force would give |Q|/0); the one formula of the loop's peaks and
+    the time-history table."""
+    if in_contact and vertical_force > 0.0:
+        return abs(lateral_force) / vertical_force
+    return 0.0
+
+
+@njit(cache=True)
+def derailment_coefficients(lateral_force, vertical_force, in_contact):
+    """:func:`derailment_coefficient` over arrays (the table's Q/P columns)."""
+    out = np.zeros(lateral_force.shape[0])
+    for i in range(out.shape[0]):
+        out[i] = derailment_coefficient(lateral_force[i], vertical_force[i], in_contact[i])
+    return out
+
+
+@njit(cache=True)
 def record_wheel_step(rec, wheel, step):
     """Peaks and contact loss of one step (module docstring); returns the number of wheels in
     contact."""
@@ -64,10 +83,9 @@ def record_wheel_step(rec, wheel, step):
             if wheel[w, k, 4] > 0.0:
                 in_contact += 1
                 contact_loss[w, k, 4] = -1
-                if fz > 0.0:   # Q/P is defined in contact only
-                    qp = abs(fy) / fz
-                    if qp > wheel_peak[w, k, 3]:
-                        wheel_peak[w, k, 3] = qp
+                qp = derailment_coefficient(fy, fz, True)
+                if qp > wheel_peak[w, k, 3]:
+                    wheel_peak[w, k, 3] = qp
             else:
                 if contact_loss[w, k, 4] < 0:
                     contact_loss[w, k, 0] += 1

@@ -16,7 +16,7 @@ Formulas and sources (physics.md section 4 unless stated):
   M_z = f23 xi_y - f33 xi_sp (spin in rad/m). Coefficients: Kalker's table for nu = 0.25
   (CONTACT ``linrol`` / Kalker 1967 Table E.3); the C23 value at a/b = 0.8 is printed 1.15 in
   physics.md and is corrected to 1.25 here (the printed value breaks the monotone trend of its
-  neighbours 1.14 and 1.36; classic bug 9).
+  neighbours 1.14 and 1.36).
 * Shen-Hedrick-Elkins (1983) saturation: beta = |F| / (mu N); F' = mu N (beta - beta^2/3 +
   beta^3/27) for beta <= 3, else mu N; F_x, F_y and M_z are scaled by F'/|F|.
 * Flange contact: a stiff lateral spring beyond the flange clearance,
