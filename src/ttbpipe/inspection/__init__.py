@@ -13,9 +13,10 @@ Errors are :class:`InspectionError` (a ``ValueError``) naming the file, row and 
 The synthetic module is imported lazily, since it depends on the irregularity stage.
 """
 
+from ..dates import DATE_PATTERN
 from .discover import CampaignFolderError, discover_campaigns
-from .format import (CHAINAGE_COLUMN, DATE_PATTERN, REQUIRED_COLUMNS, InspectionError,
-                     apply_mapping, campaign_date, read_campaign)
+from .format import (CHAINAGE_COLUMN, REQUIRED_COLUMNS, InspectionError, apply_mapping,
+                     campaign_date, read_campaign)
 from .validate import (CLEANING_DEFAULTS, REPAIR_KINDS, CleaningReport, check_campaign,
                        clean_campaign, options_from_config)
 
