@@ -65,6 +65,7 @@ import pandas as pd
 import scipy.signal
 
 from ..channels import INSPECTION_COLUMNS
+from ..io import jsonable
 from .format import (CHAINAGE_COLUMN, CHAINAGE_UNITS_TO_M, REQUIRED_COLUMNS, InspectionError,
                      apply_mapping, campaign_date, numeric_column, unit_error_message)
 from .plausibility import check_band_rms
@@ -156,17 +157,7 @@ class CleaningReport:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (floats, ints, strings, lists, dicts; NaN -> None)."""
-        def clean(obj: Any) -> Any:
-            if isinstance(obj, dict):
-                return {str(k): clean(v) for k, v in obj.items()}
-            if isinstance(obj, (list, tuple)):
-                return [clean(v) for v in obj]
-            if isinstance(obj, (np.integer,)):
-                return int(obj)
-            if isinstance(obj, (float, np.floating)):
-                return None if not math.isfinite(obj) else float(obj)
-            return obj
-        return clean(dataclasses.asdict(self))
+        return jsonable(dataclasses.asdict(self), nan_as_none=True)
 
     def note(self, message: str, level: int = logging.INFO) -> None:
         """Log ``message`` (prefixed with the source) and keep it in the report."""
