@@ -57,6 +57,7 @@ import numpy as np
 import pandas as pd
 from scipy.ndimage import uniform_filter1d
 
+from .. import streams
 from ..channels import INSPECTION_COLUMNS, SPECTRAL_CHANNELS, rails_from_spectral
 from ..dates import MEAN_DAYS_PER_MONTH, add_months
 from ..io import atomic_path, write_table
@@ -65,7 +66,8 @@ from .validate import CLEANING_DEFAULTS
 
 logger = logging.getLogger(__name__)
 
-_STREAM_LAYOUT, _STREAM_CAMPAIGN = 0, 1
+# Stream ids of the synthetic-inspection seed tree (ttbpipe.streams).
+_STREAM_LAYOUT, _STREAM_CAMPAIGN = streams.SYNTHETIC_LAYOUT, streams.SYNTHETIC_CAMPAIGN
 # The default of clean_campaign(plausible_limit_mm=...); FRA classes 1-5 exceed it (long waves).
 _DEFAULT_PLAUSIBLE_LIMIT_MM = CLEANING_DEFAULTS["plausible_limit_mm"]
 

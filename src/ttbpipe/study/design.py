@@ -39,13 +39,15 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
+from .. import streams
 from ..configuration import section_defaults, validate_section
 from ..dates import add_months
 
 log = logging.getLogger(__name__)
 
-#: Fixed stream number of the simulation stage in the study's seed tree.
-STREAM_ID = 7
+#: Stream id of the study's samples in the study's seed tree
+#: (:data:`ttbpipe.streams.SIMULATION`).
+STREAM_ID = streams.SIMULATION
 
 SCENARIO_KINDS = ("irregularity", "forecast", "fields", "fields_mc", "irregularity_mc")
 #: Label of the plain Monte Carlo irregularity scenario (case 3).

@@ -14,6 +14,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from .. import streams
 from ..configuration import section_defaults, validate_section
 from ..dates import add_months, months_between
 from ..io import read_table
@@ -237,7 +238,8 @@ def validation_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any],
     observed = [(months_between(base_date, str(p.sections["campaign_date"].iloc[0])), p) for p in held]
     levels = tuple(float(x) for x in v["band"])
     rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
-                                                        STREAM_MONTE_CARLO, 1]))
+                                                        STREAM_MONTE_CARLO,
+                                                        streams.TIPM_VALIDATION_SUBSTREAM]))
     coverage, _, tqi_band = forecast_coverage(model, base, observed, levels,
                                               int(v["monte_carlo_paths"]), rng)
     n_steps = tqi_band.shape[0]
