@@ -122,7 +122,7 @@ def test_train_layout_and_static_loads():
     gaps = -np.diff(m.wheelset_x[:5])
     assert np.allclose(gaps, [2.5, 14.875, 2.5, 5.125])
     motor = motor_car()
-    assert m.static_wheel_load[0] == pytest.approx(9.81 * (48000 / 8 + 3200 / 4 + 2400 / 2))
+    assert m.static_wheel_load[0] == pytest.approx(9.80665 * (48000 / 8 + 3200 / 4 + 2400 / 2))
     # couplers present between 4 pairs of cars, acting in y and z
     assert m.coupler_stiffness.nnz > 0
 

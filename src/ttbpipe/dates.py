@@ -39,4 +39,5 @@ def months_between(a: str, b: str) -> float:
     """Months from ISO date ``a`` to ISO date ``b``: the whole calendar months plus the day
     difference in :data:`MEAN_DAYS_PER_MONTH` (negative when ``b`` is before ``a``)."""
     da, db = _dt.date.fromisoformat(a), _dt.date.fromisoformat(b)
-    return (db.year - da.year) * 12 + (db.month - da.month) + (db.day - da.day) / MEAN_DAYS_PER_MONTH
+    whole_months = (db.year - da.year) * 12 + (db.month - da.month)
+    return whole_months + (db.day - da.day) / MEAN_DAYS_PER_MONTH

@@ -21,8 +21,6 @@ from .samples import resolve_simulation
 
 log = logging.getLogger(__name__)
 
-_G = 9.80665
-
 
 def _plt():
     import matplotlib

@@ -23,9 +23,12 @@ import logging
 from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
+from ..constants import STANDARD_GRAVITY
+
 log = logging.getLogger(__name__)
 
-GRAVITY = 9.81  # m/s^2
+#: Gravity acting on the train (m/s^2): :data:`ttbpipe.constants.STANDARD_GRAVITY`.
+GRAVITY = STANDARD_GRAVITY
 
 
 @dataclass
