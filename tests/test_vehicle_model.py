@@ -81,7 +81,7 @@ def test_secondary_vertical_shape_vector_matches_appendix_b():
 def test_bounce_frequencies_per_bogie_units():
     """Car-body bounce 0.75 Hz and bogie bounce 6.0 Hz with wheelsets held (physics.md s.6 [C]:
     these reproduce the paper only with Zeng's per-bogie/per-wheelset stiffness, i.e. per-spring
-    values halved; bug 8). Tolerance 2 % (physics.md gives 2 digits)."""
+    values halved; physics.md section 7 item 8). Tolerance 2 % (physics.md gives 2 digits)."""
     car = trailer_car()
     m = _single(car)
     keep = np.arange(15)  # car body and bogies; wheelsets fixed

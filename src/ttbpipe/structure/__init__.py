@@ -1,4 +1,4 @@
-"""Track-bridge structure (issue 3): rails on fasteners, slab/ballasted track, girders, piers.
+"""Track-bridge structure: rails on fasteners, slab/ballasted track, girders, piers.
 
 Linear part of the Xu-Zhai-Li train-track-bridge model (paper sections 2.2.4-2.2.10). Entry points:
 

@@ -1,4 +1,4 @@
-"""Figures, tables and summaries of the paper's case studies (issue 8; docs/validation.md).
+"""Figures, tables and summaries of the seed paper's case studies (docs/validation.md).
 
 :func:`sweep_report` (case 1: Figs. 6-8, eq. 55) and :func:`compare_report` (cases 2-4: Table 1,
 Figs. 9-17) turn the case outputs into the figures and the short markdown summary that

@@ -1,4 +1,4 @@
-"""The seed paper's section 5 case studies as ready-made studies (issue 8; docs/validation.md).
+"""The seed paper's section 5 case studies as ready-made studies (docs/validation.md).
 
 * :func:`apply_scale`: ``--config scale=small`` (or ``medium``) merges a case file's overlay;
 * case 1 (section 5.1): :func:`sweep_speeds`, :func:`run_speed` (one deterministic coupled run
