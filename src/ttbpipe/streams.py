@@ -59,9 +59,12 @@ from typing import Mapping
 FIELDS = 5
 #: Study samples and their scenario inputs (ttbpipe.study.design, ttbpipe.study.samples).
 SIMULATION = 7
-#: Scenario-key labels under :data:`SIMULATION` that seed study-wide inputs rather than samples
-#: (mean-spectrum profile, plain Monte Carlo fields); never a scenario label.
-SIMULATION_RESERVED_LABELS: tuple[str, ...] = ("mean_spectrum", "fields_mc")
+#: Scenario-key label under :data:`SIMULATION` of the mean-spectrum profile's seed.
+MEAN_SPECTRUM_LABEL = "mean_spectrum"
+#: Scenario-key label under :data:`SIMULATION` of the plain Monte Carlo fields' seed.
+MC_FIELDS_LABEL = "fields_mc"
+#: Labels that seed study-wide inputs rather than samples: never a scenario label.
+SIMULATION_RESERVED_LABELS: tuple[str, ...] = (MEAN_SPECTRUM_LABEL, MC_FIELDS_LABEL)
 #: Spawn key of each parameter group under :data:`FIELDS`: a group's numbers do not depend on
 #: which other groups are enabled.
 FIELD_GROUPS: Mapping[str, int] = MappingProxyType({"C1": 0, "C2": 1, "C3": 2, "C4": 3})
