@@ -1,4 +1,4 @@
-"""Timings and figures of the random-field stage (issue 5). Prints; asserts nothing.
+"""Timings and figures of the random-field stage. Prints; asserts nothing.
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_fields.py [--config config/config.yaml]
 

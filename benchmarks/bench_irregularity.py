@@ -1,4 +1,4 @@
-"""Timings and accuracy figures of the irregularity stage (issue 2). Prints; asserts nothing.
+"""Timings and accuracy figures of the irregularity stage. Prints; asserts nothing.
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_irregularity.py [--length-km 200]
 

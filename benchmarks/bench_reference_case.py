@@ -4,7 +4,7 @@
         [--lateral-creep semi_implicit|explicit]
 
 Prints the set-up time (structure, stability check, static equilibrium), the time loop's wall and
-CPU time, wall seconds per simulated second, the wall
+CPU time, wall seconds per simulated second (target: at most 1 s on one core), the wall
 time of a whole sample (``run_coupled``: set-up, loop, table, summary), and the split of a step
 between the structure kernel and the rest (vehicle, contact, irregularity, monitors), with
 ``FIGURE`` lines for benchmarks/run_all.py. The script compiles (or loads the numba cache) on a

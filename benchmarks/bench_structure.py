@@ -1,6 +1,6 @@
 """Benchmark: reference structure under a 5-car train of moving constant wheel loads.
 
-Reference structure (issue 3): 100 m approach + 5 x 32 m simply supported spans + 100 m approach,
+Reference structure: 100 m approach + 5 x 32 m simply supported spans + 100 m approach,
 two CHN60 rails on fasteners, CRTS II slab on CA on the girders, ballasted approaches, bearings and
 piers; 20 axles (5 cars x 4) = 40 wheel loads of 70 kN moving at 300 km/h; Zhai's explicit method.
 Prints the DOF count, steps per second and wall seconds per simulated second on one core.

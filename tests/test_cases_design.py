@@ -1,4 +1,4 @@
-"""Paper case studies (issue 8): designs, seeds, the scale switch, eq. 55 and the comparisons.
+"""Paper case studies: designs, seeds, the scale switch, eq. 55 and the comparisons.
 
 Fast tests of ttbpipe.study.cases / design extensions; the coupled runs are in
 test_cases_runs.py.

@@ -1,4 +1,4 @@
-"""Paper case studies (issue 8): the new sample kinds and case-1 runs on tiny structures.
+"""Paper case studies: the new sample kinds and case-1 runs on tiny structures.
 
 * plain Monte Carlo fields (case 2's MCM): exact marginal statistics, independent of the KLE
   samples of the same index (the two estimates of Fig. 10 must not share random numbers);

@@ -1,4 +1,4 @@
-"""The paper cases' small variants, exactly as a user runs them (issue 8):
+"""The paper cases' small variants, exactly as a user runs them:
 
     snakemake --cores 2 --configfile config/case<N>.yaml --config scale=small
 

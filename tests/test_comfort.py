@@ -8,7 +8,7 @@ from ttbpipe.vehicle.comfort import sperling_index, sperling_weighting
 
 def test_weighting_is_inverse_square_not_inverse():
     """F = 400/f^2 (vertical) and 650/f^2 (lateral) in the middle band, 0.325 f^2 / 0.8 f^2 below,
-    1 above (physics.md s.4; classic bug 10 is 400/f). Exact."""
+    1 above (physics.md s.4; 400/f is a common error, physics.md section 7 item 10). Exact."""
     assert sperling_weighting(np.array([10.0]), "vertical")[0] == pytest.approx(4.0)
     assert sperling_weighting(np.array([2.0]), "vertical")[0] == pytest.approx(1.3)
     assert sperling_weighting(np.array([30.0]), "vertical")[0] == 1.0

@@ -27,7 +27,7 @@ def test_hertz_constant_and_stiffness_match_physics_md():
 
 @pytest.mark.parametrize("penetration", [1e-6, 2e-5, 8e-5, 2e-4])
 def test_hertz_law_at_tabulated_points(penetration):
-    """P = (dZ/G)^1.5 exactly (physics.md s.4), and zero on separation (bug 12)."""
+    """P = (dZ/G)^1.5 exactly (physics.md s.4), and zero on separation (physics.md s.7 item 12)."""
     g = hertz_g(0.43, "cone")
     assert _hertz_force(penetration, g) == pytest.approx((penetration / g) ** 1.5, rel=1e-14)
     assert _hertz_force(-penetration, g) == 0.0

@@ -1,4 +1,4 @@
-"""Time-step convergence of the coupled train-track-bridge loop (issue 4 requirement)."""
+"""Time-step convergence of the coupled train-track-bridge loop (project requirement)."""
 
 import copy
 from pathlib import Path
@@ -25,7 +25,7 @@ DEFAULT_DT = CASE["simulation"]["time_step_s"]
 def test_halving_the_time_step_changes_peaks_by_less_than_2_percent():
     """Two cars at 300 km/h on TB/T 3352 irregularities over one 32 m span: halving dt from
     the default 1.25e-4 s to 6.25e-5 s changes the peak wheel-rail vertical force (every step,
-    every wheel) and the peak mid-span deck acceleration by less than 2 % each (issue 4
+    every wheel) and the peak mid-span deck acceleration by less than 2 % each (project
     tolerance). Zhai's scheme is second order (physics.md s.5), so the change also estimates
     the remaining error."""
     p1, a1, _ = _peaks(DEFAULT_DT)
@@ -38,9 +38,9 @@ def test_halving_the_time_step_changes_peaks_by_less_than_2_percent():
 
 def test_semi_implicit_creep_at_default_step_matches_explicit_small_step():
     """Second method: the semi-implicit lateral creep at the default step (1.25e-4 s, above the
-    explicit creep limit 6.1e-5 s) against the explicit creep law at 2.5e-5 s (the issue 4
-    reference step): peak vertical wheel force, peak deck acceleration and peak lateral wheel
-    force within 2 % (issue 9 tolerance: peaks within 1-2 % of the small-step solution)."""
+    explicit creep limit 6.1e-5 s) against the explicit creep law at 2.5e-5 s (its reference
+    step): peak vertical wheel force, peak deck acceleration and peak lateral wheel
+    force within 2 % (project tolerance: peaks within 1-2 % of the small-step solution)."""
     p1, a1, q1 = _peaks(DEFAULT_DT)
     p0, a0, q0 = _peaks(2.5e-5, "explicit")
     assert abs(p1 / p0 - 1) < 0.02, (p0, p1)

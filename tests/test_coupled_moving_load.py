@@ -13,7 +13,7 @@ MONITOR = [{"name": "deck", "kind": "girder", "span": 0, "position": 0.5, "direc
 
 def test_girder_deflection_matches_moving_static_wheel_loads():
     """Two cars at 200 km/h on a perfect track over one 32 m span. The coupled loop transfers the
-    contact forces to the rails; the structure owner's moving-load solver (same structure, same
+    contact forces to the rails; the structure's moving-load solver (same structure, same
     rail shape functions) moves constant forces equal to the coupled run's static contact forces
     (F_z, F_y, M_x per wheel) at the same positions and speed. On a perfect track the dynamic
     wheel-load variation is small, so the mid-span girder deflection histories agree: peak within

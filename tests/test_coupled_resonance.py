@@ -29,7 +29,7 @@ def test_deck_acceleration_peaks_at_resonance_speed():
     mid-span vertical acceleration is largest at V = 3.6 f1 d / i (seed paper eq. 55, Xia et al.;
     i = 1), with f1 the first vertical girder mode of the same structure model (modal analysis)
     and d = 25 m. The sweep covers -20..+20 % of the prediction, in 5 % steps near it; the peak speed is
-    refined by a parabola through the three highest points. Tolerance 5 % (issue 4). The
+    refined by a parabola through the three highest points. Tolerance 5 % (project requirement). The
     i = 2 resonance (~254 km/h) is not used: there f1 L / V = 2.55, close to the cancellation
     condition of a 32 m span (free-vibration amplitude ~ |cos(pi f1 L / V)| = 0.15), so its peak
     is suppressed; at i = 1 the factor is 0.63 and grows with V, which tilts the (broad, six-car)

@@ -54,3 +54,27 @@ def test_missing_provenance_is_reported(tmp_path):
     pd.DataFrame({"a": [1]}).to_parquet(path)
     with pytest.raises(KeyError, match="no ttbpipe provenance"):
         io.read_provenance(path)
+
+
+def test_jsonable_makes_numpy_values_and_paths_plain():
+    """Every numpy scalar becomes the Python scalar of the same value, arrays nested lists, paths
+    strings, keys strings; NaN stays NaN unless nan_as_none (strict JSON has no NaN)."""
+    import math
+    from pathlib import Path
+
+    import numpy as np
+    value = {"i": np.int32(3), "f": np.float32(0.5), "b": np.bool_(True), 2: (1, np.int64(2)),
+             "p": Path("a/b.parquet"), "a": np.array([[1.0, np.nan]]), "n": float("nan"),
+             "nested": [{"x": np.float64(np.inf)}]}
+    plain = io.jsonable(value)
+    assert plain["i"] == 3 and type(plain["i"]) is int
+    assert plain["f"] == 0.5 and type(plain["f"]) is float
+    assert plain["b"] is True
+    assert plain["2"] == [1, 2] and type(plain["2"][1]) is int
+    assert plain["p"] == "a/b.parquet"
+    assert plain["a"][0][0] == 1.0 and math.isnan(plain["a"][0][1])
+    assert math.isnan(plain["n"]) and plain["nested"][0]["x"] == math.inf
+    strict = io.jsonable(value, nan_as_none=True)
+    assert strict["a"] == [[1.0, None]] and strict["n"] is None
+    assert strict["nested"] == [{"x": None}] and strict["i"] == 3
+    json.dumps(strict, allow_nan=False)

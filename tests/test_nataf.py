@@ -43,7 +43,7 @@ CLOSED_FORM_CASES = [
                          ids=[c[0] for c in CLOSED_FORM_CASES])
 @pytest.mark.parametrize("rho_x", [-0.5, 0.3, 0.7, 0.9])
 def test_quadrature_matches_closed_forms(label, dist_a, dist_b, closed_form, rho_x):
-    """Gauss-Hermite (64 nodes) + brentq reproduces the closed forms within 1e-6 (issue 5)."""
+    """Gauss-Hermite (64 nodes) + brentq reproduces the closed forms within 1e-6 (requirement)."""
     target = np.array([[1.0, rho_x], [rho_x, 1.0]])
     expected = closed_form(rho_x)
     if abs(expected) >= 1:

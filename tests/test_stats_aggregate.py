@@ -183,7 +183,7 @@ def test_state_budget_and_moments_only(tmp_path):
 
 
 def test_results_bit_identical_across_batch_sizes(tmp_path):
-    """Issue 7: results must not depend on the batch size. Splitting the same 23 weighted samples
+    """Results must not depend on the batch size. Splitting the same 23 weighted samples
     into batches of 3 and of 7 (files named so that their lexicographic order is not the sample
     order) gives bit-identical means, standard deviations and percentiles (tolerance: none)."""
     rng = np.random.default_rng(5)

@@ -1,4 +1,4 @@
-"""Track on subgrade at both approaches (issue 3): slab and ballasted approaches build, have a
+"""Track on subgrade at both approaches: slab and ballasted approaches build, have a
 non-singular static stiffness with the right rail deflection, run as moving-load and coupled
 cases, and a train straddling the bridge-subgrade junction starts from its static equilibrium.
 

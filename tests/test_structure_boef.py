@@ -2,7 +2,7 @@
 
 Reference: Winkler foundation (Timoshenko 1926; Hetenyi, Beams on Elastic Foundation, 1946):
 w0 = P beta/(2k), beta = (k/(4EI))^(1/4), with the discrete pads smeared, k = k_pad/spacing.
-Tolerance 5 % (issue 3; discrete support spacing 0.63 m << pi/beta = 2.4 m).
+Tolerance 5 % (project requirement; discrete support spacing 0.63 m << pi/beta = 2.4 m).
 Checked (a) by a static solve K u = f of the assembled structure with the load over a fastener
 and mid-way between two, and (b) by the time loop of config/validation/boef_static.yaml, whose
 damped response settles to the static deflection.

@@ -4,7 +4,7 @@ Reference: L. Fryba, Vibration of Solids and Structures under Moving Loads (1999
 undamped Euler-Bernoulli beam, w(x,t) = sum_j q_j(t) sin(j pi x/L) with
 q_j = 2P/(mL) / (w_j^2 - W_j^2) (sin W_j t - W_j/w_j sin w_j t) while the force is on the span,
 W_j = j pi v/L, w_j = j^2 w_1, and free vibration after it leaves. 80 terms.
-Tolerance: 1 % of the peak midspan deflection (issue 3), at alpha = v/(2 f_1 L) = 0.25, 1/3, 0.5.
+Tolerance: 1 % of the peak midspan deflection (requirement), at alpha = v/(2 f_1 L) = 0.25, 1/3, 0.5.
 At alpha = 1/3 the residual free vibration cancels (w_1 L/v = 3 pi, all odd modes): the simulated
 residual amplitude must be below 1 % of the static deflection, against 52 % at alpha = 0.25.
 The cases are the shipped configs config/validation/fryba_alpha_*.yaml.

@@ -8,7 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ttbpipe.study.design import (DESIGN_COLUMNS, add_months, batch_rows, batches, build_design,
+from ttbpipe.dates import add_months
+from ttbpipe.study.design import (DESIGN_COLUMNS, batch_rows, batches, build_design,
                                   sample_seed_sequence, scenario_labels)
 
 

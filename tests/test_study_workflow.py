@@ -1,4 +1,4 @@
-"""The study stage under Snakemake: killing a run and rerunning it (issue 7).
+"""The study stage under Snakemake: killing a run and rerunning it.
 
 A tiny fields-only study (one 32 m span, one car, 10 m of run, 4 samples in batches of 1) in a
 scratch copy of the repository. Snakemake is interrupted (SIGINT to its process group, as Ctrl-C

@@ -1,4 +1,4 @@
-"""Issue 6 must-show criteria on the synthetic default series (tbt3352, 5 km, 36 monthly
+"""TIPM acceptance criteria on the synthetic default series (tbt3352, 5 km, 36 monthly
 campaigns, seed 1: the data of the default study), through the real cleaning and PSD APIs."""
 
 import numpy as np

@@ -33,7 +33,7 @@ def test_bin_means_match_replicated_reference(n, m):
 
 
 def test_copula_selection_meets_the_acceptance_criteria():
-    """Issue 6 must-show on a population of known statistics: <= N/10 sets reproduce the
+    """TIPM acceptance criteria on a population of known statistics: <= N/10 sets reproduce the
     per-frequency mean and std within 5 % (here exact to 1e-9 by construction: bin means and a
     bisection-matched tilt) and the section-RMS distribution (KS not rejected at 5 %)."""
     population = _population()

@@ -81,7 +81,7 @@ def test_secondary_vertical_shape_vector_matches_appendix_b():
 def test_bounce_frequencies_per_bogie_units():
     """Car-body bounce 0.75 Hz and bogie bounce 6.0 Hz with wheelsets held (physics.md s.6 [C]:
     these reproduce the paper only with Zeng's per-bogie/per-wheelset stiffness, i.e. per-spring
-    values halved; bug 8). Tolerance 2 % (physics.md gives 2 digits)."""
+    values halved; physics.md section 7 item 8). Tolerance 2 % (physics.md gives 2 digits)."""
     car = trailer_car()
     m = _single(car)
     keep = np.arange(15)  # car body and bogies; wheelsets fixed
@@ -122,7 +122,7 @@ def test_train_layout_and_static_loads():
     gaps = -np.diff(m.wheelset_x[:5])
     assert np.allclose(gaps, [2.5, 14.875, 2.5, 5.125])
     motor = motor_car()
-    assert m.static_wheel_load[0] == pytest.approx(9.81 * (48000 / 8 + 3200 / 4 + 2400 / 2))
+    assert m.static_wheel_load[0] == pytest.approx(9.80665 * (48000 / 8 + 3200 / 4 + 2400 / 2))
     # couplers present between 4 pairs of cars, acting in y and z
     assert m.coupler_stiffness.nnz > 0
 

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_shipped_case_files_pass_the_case_schema():
     """The reference case and the vehicle validation cases are valid `ttbpipe simulate` inputs
-    (the structure owner's JSON schema) and have a train: section (dispatch to run_coupled)."""
+    (the case JSON schema) and have a train: section (dispatch to run_coupled)."""
     paths = [ROOT / "config" / "reference_case.yaml",
              *sorted((ROOT / "config" / "validation").glob("vehicle_*.yaml"))]
     assert len(paths) >= 4
@@ -51,7 +51,7 @@ def test_vehicle_static_newton_matches_weight_distribution():
 
 def test_rigid_track_low_speed_keeps_static_loads():
     """Perfect rigid track at 36 km/h for 2 s: wheel loads equal the weight distribution within
-    0.5 % at every output step (issue 4 requirement), the t = 0 loads equal the static solution
+    0.5 % at every output step (project requirement), the t = 0 loads equal the static solution
     (no initial transient, 1e-9), and there is no lateral response (|y| < 1e-12 m, H < 1e-6 N)."""
     case = load_case(ROOT / "config" / "validation" / "vehicle_static_rigid.yaml")
     table, summary = run_coupled(case)

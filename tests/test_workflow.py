@@ -2,7 +2,7 @@
 
 What it shows: the DAG runs from synthetic inspection data to the first figure; every table
 carries provenance; and adding one inspection campaign reruns only that campaign's jobs and what
-genuinely depends on it (issue 2).
+genuinely depends on it.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Each subcommand lives in its own module, which provides ``add_arguments(parser)`` and
 ``run(args) -> int``. Modules are imported only when their subcommand runs, so that
-``ttbpipe --help`` stays fast and a broken optional stage cannot break the others.
+``ttbpipe --help`` stays fast and each command loads only the dependencies it needs.
 """
 
 from __future__ import annotations
@@ -55,11 +55,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     setup_logging(known.log, logging.DEBUG if known.verbose else logging.INFO)
     module_name, help_text = COMMANDS[known.command]
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as exc:  # a stage that is not installed in this version
-        print(f"ttbpipe {known.command}: not available in this version ({exc})", file=sys.stderr)
-        return 2
+    module = importlib.import_module(module_name)
     sub_parser = argparse.ArgumentParser(prog=f"ttbpipe {known.command}", description=help_text)
     module.add_arguments(sub_parser)
     args = sub_parser.parse_args(rest)

@@ -8,7 +8,8 @@ Every table ttbpipe writes goes through :func:`write_table`, which
   ttbpipe version, the resolved configuration that produced the table, the table's kind and any
   extra fields the caller passes.
 
-:func:`read_provenance` reads that document back.
+:func:`read_provenance` reads that document back; :func:`jsonable` makes numpy values and paths
+JSON-ready (for the provenance, the cleaning reports and every other JSON or YAML output).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import datetime as _dt
 import json
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -31,18 +33,27 @@ from . import __version__, code_version
 PROVENANCE_KEY = b"ttbpipe"
 
 
-def _jsonable(obj: Any) -> Any:
-    """Convert numpy scalars/arrays and paths so that ``json.dumps`` accepts them."""
+def jsonable(obj: Any, *, nan_as_none: bool = False) -> Any:
+    """``obj`` with numpy scalars and arrays, paths and tuples made plain Python values, so that
+    ``json.dumps`` (and ``yaml.safe_dump``) accept it.
+
+    Mappings become dicts with string keys, lists and tuples lists, numpy arrays nested lists,
+    numpy scalars Python scalars, paths strings; other values are returned unchanged. With
+    ``nan_as_none``, non-finite floats become ``None`` (JSON has no NaN or infinity: strict
+    readers reject ``json.dumps``'s ``NaN``); without, they stay floats (the provenance keeps them).
+    """
     if isinstance(obj, Mapping):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v, nan_as_none=nan_as_none) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [jsonable(v, nan_as_none=nan_as_none) for v in obj]
     if isinstance(obj, np.ndarray):
-        return obj.tolist()
+        return jsonable(obj.tolist(), nan_as_none=True) if nan_as_none else obj.tolist()
     if isinstance(obj, np.generic):
-        return obj.item()
+        obj = obj.item()
     if isinstance(obj, Path):
         return str(obj)
+    if nan_as_none and isinstance(obj, float) and not math.isfinite(obj):
+        return None
     return obj
 
 
@@ -54,9 +65,9 @@ def provenance(config: Mapping[str, Any] | None = None, kind: str | None = None,
         "code_version": code_version(),
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "kind": kind,
-        "config": _jsonable(dict(config)) if config is not None else None,
+        "config": jsonable(dict(config)) if config is not None else None,
     }
-    doc.update(_jsonable(extra))
+    doc.update(jsonable(extra))
     return doc
 
 

@@ -1,4 +1,4 @@
-# Paper case studies (issue 8; seed paper section 5; docs/validation.md). Active only when the
+# Paper case studies (seed paper section 5; docs/validation.md). Active only when the
 # configuration has a `case:` section (config/case1.yaml .. case4.yaml); then `snakemake` builds
 # exactly the case's targets (all_targets() in common.smk returns case_targets()).
 #

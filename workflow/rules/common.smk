@@ -1,6 +1,5 @@
 # Configuration validation, campaign discovery and input functions shared by all stages.
 
-import datetime as _dt
 import os
 import re
 from pathlib import Path
@@ -52,9 +51,10 @@ def report_caption_path(path: str) -> str:
     return path if os.path.isabs(path) else os.path.join("..", "..", path)
 
 
-# The campaign date and the folder scan live in the package (ttbpipe.inspection).
+# The campaign date and its month arithmetic (ttbpipe.dates) and the folder scan
+# (ttbpipe.inspection) live in the package.
+from ttbpipe.dates import DATE_PATTERN, add_months
 from ttbpipe.inspection.discover import discover_campaigns as _discover_campaign_files
-from ttbpipe.inspection.format import DATE_PATTERN
 
 wildcard_constraints:
     date=DATE_PATTERN,
@@ -69,26 +69,14 @@ localrules:
     tipm_figures,
 
 
-def _add_months(date: _dt.date, months: int) -> _dt.date:
-    """Same day of month `months` later (clamped to the month's last day)."""
-    import calendar
-
-    month_index = date.month - 1 + months
-    year, month = date.year + month_index // 12, month_index % 12 + 1
-    day = min(date.day, calendar.monthrange(year, month)[1])
-    return _dt.date(year, month, day)
-
-
 def synthetic_dates() -> list[str]:
-    """Dates of the synthetic default campaigns, when the configuration asks for them."""
+    """Dates of the synthetic default campaigns, when the configuration asks for them: the
+    start date and every `interval_months` calendar months after it (day clamped to the month)."""
     syn = config["inspections"].get("synthetic", {})
     if not syn.get("enabled", False):
         return []
-    start = _dt.date.fromisoformat(syn["start_date"])
-    return [
-        _add_months(start, k * syn["interval_months"]).isoformat()
-        for k in range(syn["campaigns"])
-    ]
+    return [add_months(syn["start_date"], k * syn["interval_months"])
+            for k in range(syn["campaigns"])]
 
 
 def discover_campaigns() -> dict[str, str]:

@@ -24,6 +24,7 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import optimize, special, stats
 
+from .. import streams
 from ..configuration import section_defaults
 
 # Carrier kinds: where along the line each parameter lives.
@@ -51,9 +52,10 @@ GROUP_DEFINITIONS: dict[str, GroupDefinition] = {
                           ("girder_E", "girder_mass", "girder_Iy", "girder_Iz")),
 }
 
-# Fixed stream number of each group: a group's random numbers do not depend on which other groups
-# are enabled (sampling.py spawns one child seed per group from (study seed, stream, sample)).
-GROUP_STREAM = {"C1": 0, "C2": 1, "C3": 2, "C4": 3}
+# Spawn key of each group (ttbpipe.streams.FIELD_GROUPS): a group's random numbers do not depend
+# on which other groups are enabled (sampling.py spawns one child seed per group from (study seed,
+# stream, sample)).
+GROUP_STREAM = streams.FIELD_GROUPS
 
 DISTRIBUTIONS = ("normal", "lognormal", "uniform", "gamma", "weibull", "truncated_normal")
 

@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import linalg
 
+from .. import streams
 from ..configuration import validate_section
 from ..threads import pinned
 from .covariance import correlation_matrix
@@ -39,8 +40,8 @@ from .nataf import NatafTransform
 
 log = logging.getLogger(__name__)
 
-# Fixed stream number of the fields stage in the study's seed tree (issue 5).
-STREAM_ID = 5
+#: Stream id of the fields stage in the study's seed tree (:data:`ttbpipe.streams.FIELDS`).
+STREAM_ID = streams.FIELDS
 
 METHODS = ("kle", "mc")
 TABLE_COLUMNS = ("sample_index", "parameter", "carrier_index", "x_m", "factor")

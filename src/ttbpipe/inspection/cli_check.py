@@ -20,7 +20,8 @@ from typing import Any
 
 from ..io import write_table, write_text
 from .format import InspectionError, check_mapping
-from .validate import CLEANING_DEFAULTS, DETREND_KINDS, check_campaign, options_from_config
+from .repairs import DETREND_KINDS
+from .validate import CLEANING_DEFAULTS, check_campaign, options_from_config
 
 logger = logging.getLogger(__name__)
 

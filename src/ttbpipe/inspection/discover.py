@@ -27,6 +27,7 @@ import re
 from pathlib import Path
 from typing import Iterable
 
+from ..io import read_provenance
 from .format import CAMPAIGN_NAME, SUFFIXES, diagnose_campaign_name
 
 logger = logging.getLogger(__name__)
@@ -75,7 +76,6 @@ def _is_synthetic(path: Path) -> bool:
     if path.suffix != ".parquet":
         return False
     try:
-        from ..io import read_provenance
         return read_provenance(path).get("kind") == SYNTHETIC_KIND
     except Exception:  # no provenance, not Parquet, unreadable: not ours
         return False

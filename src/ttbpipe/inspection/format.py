@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from ..channels import INSPECTION_COLUMNS
+from ..dates import DATE_PATTERN  # the date of campaign file names; also importable from here
 
 logger = logging.getLogger(__name__)
 
@@ -40,11 +41,6 @@ SUFFIXES: tuple[str, ...] = (".csv", ".parquet")
 
 #: Typical sampling interval of an inspection car (m).
 TYPICAL_SAMPLING_INTERVAL_M = 0.25
-
-#: A campaign date as written in file names and wildcards, ``YYYY-MM-DD`` (ISO 8601). The one
-#: home of this pattern: the workflow's ``{date}`` wildcard and the dated scenarios of the study
-#: and statistics stages import it.
-DATE_PATTERN = r"\d{4}-\d{2}-\d{2}"
 
 #: A valid campaign file name (the date still has to be a real calendar date).
 CAMPAIGN_NAME = re.compile(rf"^({DATE_PATTERN})\.(csv|parquet)$")

@@ -47,7 +47,6 @@ the (deterministic) earlier state, never on how many campaigns are written.
 
 from __future__ import annotations
 
-import calendar
 import dataclasses
 import datetime as _dt
 import logging
@@ -58,15 +57,17 @@ import numpy as np
 import pandas as pd
 from scipy.ndimage import uniform_filter1d
 
+from .. import streams
 from ..channels import INSPECTION_COLUMNS, SPECTRAL_CHANNELS, rails_from_spectral
+from ..dates import MEAN_DAYS_PER_MONTH, add_months
 from ..io import atomic_path, write_table
 from .format import CHAINAGE_COLUMN
 from .validate import CLEANING_DEFAULTS
 
 logger = logging.getLogger(__name__)
 
-_DAYS_PER_MONTH = 365.25 / 12.0
-_STREAM_LAYOUT, _STREAM_CAMPAIGN = 0, 1
+# Stream ids of the synthetic-inspection seed tree (ttbpipe.streams).
+_STREAM_LAYOUT, _STREAM_CAMPAIGN = streams.SYNTHETIC_LAYOUT, streams.SYNTHETIC_CAMPAIGN
 # The default of clean_campaign(plausible_limit_mm=...); FRA classes 1-5 exceed it (long waves).
 _DEFAULT_PLAUSIBLE_LIMIT_MM = CLEANING_DEFAULTS["plausible_limit_mm"]
 
@@ -111,15 +112,9 @@ class SyntheticCampaign:
 
 
 def campaign_dates(start_date: str, campaigns: int, interval_months: int = 1) -> list[str]:
-    """ISO dates ``start + k * interval_months`` (day clamped to the month's end), k < campaigns."""
-    start = _dt.date.fromisoformat(start_date)
-    dates = []
-    for k in range(int(campaigns)):
-        month_index = start.month - 1 + k * int(interval_months)
-        year, month = start.year + month_index // 12, month_index % 12 + 1
-        day = min(start.day, calendar.monthrange(year, month)[1])
-        dates.append(_dt.date(year, month, day).isoformat())
-    return dates
+    """ISO dates ``start + k * interval_months`` (day clamped to the month's end), k < campaigns
+    (:func:`ttbpipe.dates.add_months`)."""
+    return [add_months(start_date, k * int(interval_months)) for k in range(int(campaigns))]
 
 
 def _raised_cosine(x: np.ndarray, centre: float, length: float) -> np.ndarray:
@@ -209,7 +204,7 @@ def synthetic_campaign_series(dates: list[str], *, spectrum: str = "tbt3352",
     months_prev = 0.0
     for k, date in enumerate(dates):
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), _STREAM_CAMPAIGN, k]))
-        months = (parsed[k] - parsed[0]).days / _DAYS_PER_MONTH
+        months = (parsed[k] - parsed[0]).days / MEAN_DAYS_PER_MONTH
         dt = months - months_prev
         months_prev = months
         if k > 0:

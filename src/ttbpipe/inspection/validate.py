@@ -1,7 +1,9 @@
 """Validation and cleaning of one inspection campaign.
 
 :func:`clean_campaign` checks a campaign table read by
-:func:`ttbpipe.inspection.format.read_campaign` and applies the documented repairs, in this order:
+:func:`ttbpipe.inspection.format.read_campaign` and applies the documented repairs, in this order
+(the checks of steps 1-3 in :mod:`.checks`, the grid of step 4 in :mod:`.grid`, the repairs of
+steps 5, 6 and 8 in :mod:`.repairs`, the report in :mod:`.cleaning_report`):
 
 0. **Mapping** (optional, config ``inspections.columns`` / ``inspections.units``): the file's
    columns renamed to ttbpipe's names and declared units converted
@@ -52,10 +54,7 @@ CARS practice for inspection data cited in the reference notes (physics.md secti
 
 from __future__ import annotations
 
-import dataclasses
 import logging
-import math
-import warnings
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
@@ -65,28 +64,21 @@ import pandas as pd
 import scipy.signal
 
 from ..channels import INSPECTION_COLUMNS
-from .format import (CHAINAGE_COLUMN, CHAINAGE_UNITS_TO_M, REQUIRED_COLUMNS, InspectionError,
-                     apply_mapping, campaign_date, numeric_column, unit_error_message)
+from .checks import (COMMON_STEP_TOLERANCE, COMMON_STEPS_M, MAX_STEP_M, MIN_STEP_M,
+                     check_chainage, check_schema, check_sensor_faults, check_units)
+from .cleaning_report import REPAIR_KINDS, CleaningReport
+from .format import CHAINAGE_COLUMN, InspectionError, apply_mapping, campaign_date
+from .grid import grid_indices, regrid, row_of
 from .plausibility import check_band_rms
+from .repairs import (DETREND_KINDS, check_missing_values, detrend_channels, find_spikes,
+                      interpolate_flagged)
+
+# The steps' public names stay importable from here, the entry point of the cleaning.
+__all__ = ["CLEANING_DEFAULTS", "DETREND_KINDS", "REPAIR_KINDS", "MIN_STEP_M", "MAX_STEP_M",
+           "COMMON_STEPS_M", "COMMON_STEP_TOLERANCE", "CleaningReport", "grid_indices",
+           "clean_campaign", "check_campaign", "options_from_config"]
 
 logger = logging.getLogger(__name__)
-
-#: Repair kinds counted in :class:`CleaningReport` ``repairs`` (samples per channel).
-REPAIR_KINDS: tuple[str, ...] = ("regridded", "dropout_interpolated", "nan_interpolated",
-                                 "spike_replaced")
-
-DETREND_KINDS: tuple[str, ...] = ("none", "constant", "linear")
-
-#: Plausible sampling steps (m); outside this range the chainage is in another unit.
-MIN_STEP_M, MAX_STEP_M = 0.01, 10.0
-
-#: Round metric sampling steps (m) of inspection cars (0.25 m is the usual one). A chainage whose
-#: step is none of them but becomes one times 0.3048 (m per foot) is written in feet.
-COMMON_STEPS_M: tuple[float, ...] = (0.1, 0.125, 0.2, 0.25, 0.5, 1.0)
-
-#: Relative tolerance of the comparison with :data:`COMMON_STEPS_M` (the step is measured over
-#: the whole file, so rounding of the chainage values hardly affects it).
-COMMON_STEP_TOLERANCE = 1e-4
 
 #: Defaults of the cleaning options, the keys of config section ``inspections.cleaning`` (plus
 #: ``sampling_tolerance`` and ``max_jitter``, function arguments only). The one home of these
@@ -110,388 +102,6 @@ CLEANING_DEFAULTS: Mapping[str, Any] = MappingProxyType({
     "band_rms_margin": 3.0,
     "max_constant_run_m": 20.0,
 })
-
-_NOMINAL_GAUGES_MM = (1000.0, 1067.0, 1435.0, 1520.0, 1668.0)
-
-
-@dataclasses.dataclass
-class CleaningReport:
-    """What :func:`clean_campaign` found and repaired in one campaign file.
-
-    ``repairs[kind][column]`` counts repaired samples and ``repair_runs[kind][column]`` the
-    contiguous runs they form, for each kind of :data:`REPAIR_KINDS` and each channel.
-    """
-
-    source: str
-    campaign_date: str | None = None
-    rows_in: int = 0
-    rows_out: int = 0
-    sampling_interval_m: float = math.nan
-    start_chainage_m: float = math.nan
-    end_chainage_m: float = math.nan
-    length_m: float = math.nan
-    repairs: dict[str, dict[str, int]] = dataclasses.field(default_factory=dict)
-    repair_runs: dict[str, dict[str, int]] = dataclasses.field(default_factory=dict)
-    max_off_grid_m: float = 0.0
-    long_excursions_kept: dict[str, int] = dataclasses.field(default_factory=dict)
-    ignored_columns: list[str] = dataclasses.field(default_factory=list)
-    renamed_columns: dict[str, str] = dataclasses.field(default_factory=dict)
-    unit_conversions: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
-    band_rms_band_m: list[float] | None = None
-    band_rms_mm: dict[str, float] = dataclasses.field(default_factory=dict)
-    detrend: str = "linear"
-    trend_removed: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)
-    cross_level_rms_difference_mm: float | None = None
-    settings: dict[str, Any] = dataclasses.field(default_factory=dict)
-    notes: list[str] = dataclasses.field(default_factory=list)
-
-    def __post_init__(self) -> None:
-        for kind in REPAIR_KINDS:
-            self.repairs.setdefault(kind, {c: 0 for c in INSPECTION_COLUMNS})
-            self.repair_runs.setdefault(kind, {c: 0 for c in INSPECTION_COLUMNS})
-
-    def total(self, kind: str) -> int:
-        """Repaired samples of one kind, summed over the channels."""
-        return int(sum(self.repairs[kind].values()))
-
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dictionary (floats, ints, strings, lists, dicts; NaN -> None)."""
-        def clean(obj: Any) -> Any:
-            if isinstance(obj, dict):
-                return {str(k): clean(v) for k, v in obj.items()}
-            if isinstance(obj, (list, tuple)):
-                return [clean(v) for v in obj]
-            if isinstance(obj, (np.integer,)):
-                return int(obj)
-            if isinstance(obj, (float, np.floating)):
-                return None if not math.isfinite(obj) else float(obj)
-            return obj
-        return clean(dataclasses.asdict(self))
-
-    def note(self, message: str, level: int = logging.INFO) -> None:
-        """Log ``message`` (prefixed with the source) and keep it in the report."""
-        self.notes.append(message)
-        logger.log(level, "%s: %s", self.source, message)
-
-    def summary(self) -> str:
-        """A one-screen, human-readable summary of the checks and repairs."""
-        lines = [
-            f"inspection file: {self.source}"
-            + (f"  (campaign {self.campaign_date})" if self.campaign_date else ""),
-            f"rows: {self.rows_in} read -> {self.rows_out} clean; sampling interval "
-            f"{self.sampling_interval_m:g} m; chainage {self.start_chainage_m:.2f} .. "
-            f"{self.end_chainage_m:.2f} m (length {self.length_m:.2f} m)",
-            f"repaired samples (runs) per channel; trend removed (detrend: {self.detrend}):",
-            f"  {'channel':20s}" + "".join(f"{k.split('_')[0]:>13s}" for k in REPAIR_KINDS)
-            + f"{'mean mm':>10s}{'mm/km':>9s}",
-        ]
-        for c in INSPECTION_COLUMNS:
-            cells = "".join(f"{self.repairs[k][c]:>7d} ({self.repair_runs[k][c]:>3d})"
-                            for k in REPAIR_KINDS)
-            trend = self.trend_removed.get(c)
-            trend_text = (f"{trend['mean_mm']:>+10.3f}{trend['slope_mm_per_km']:>+9.3f}"
-                          if trend else f"{'-':>10s}{'-':>9s}")
-            lines.append(f"  {c:20s}{cells}{trend_text}")
-        if self.max_off_grid_m:
-            lines.append(f"largest chainage deviation from the grid: {self.max_off_grid_m:.4g} m")
-        if any(self.long_excursions_kept.values()):
-            lines.append(f"long excursions kept (not spikes): {self.long_excursions_kept}")
-        if self.ignored_columns:
-            lines.append(f"ignored extra columns: {', '.join(self.ignored_columns)}")
-        if self.renamed_columns:
-            lines.append("columns mapped (inspections.columns): " + ", ".join(
-                f"{k} -> {v}" for k, v in self.renamed_columns.items()))
-        if self.unit_conversions:
-            lines.append("units converted (inspections.units): " + ", ".join(
-                f"{k} from {v['unit']}" for k, v in self.unit_conversions.items()))
-        if self.band_rms_band_m:
-            lines.append(f"band RMS {self.band_rms_band_m[0]:g}-{self.band_rms_band_m[1]:g} m "
-                         "(mm): " + ", ".join(f"{k.removesuffix('_mm')} {v:.3g}"
-                                              for k, v in self.band_rms_mm.items()))
-        if self.cross_level_rms_difference_mm is not None:
-            lines.append("cross_level vs vertical_left - vertical_right: RMS difference "
-                         f"{self.cross_level_rms_difference_mm:.3f} mm (information only)")
-        return "\n".join(lines)
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """Contiguous True runs of a boolean array as (start, stop) index pairs."""
-    padded = np.concatenate(([False], mask.astype(bool), [False]))
-    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
-    return list(zip(edges[0::2].tolist(), edges[1::2].tolist()))
-
-
-def _check_schema(df: pd.DataFrame, source: str) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Required columns as float arrays, and the list of ignored extra columns."""
-    columns = [str(c) for c in df.columns]
-    for required in REQUIRED_COLUMNS:
-        if required in columns:
-            continue
-        for col in columns:
-            message = unit_error_message(col)
-            if message and col.lower().startswith(required.rpartition("_")[0] + "_"):
-                raise InspectionError(source, None, col, message)
-        raise InspectionError(source, None, required,
-                              f"missing column {required!r} (found: {', '.join(columns)}); "
-                              f"required: {', '.join(REQUIRED_COLUMNS)}")
-    extra = [c for c in columns if c not in REQUIRED_COLUMNS]
-    values = {c: numeric_column(df[c], source, c) for c in REQUIRED_COLUMNS}
-    for c, v in values.items():
-        inf = np.isinf(v)
-        if inf.any():
-            raise InspectionError(source, int(np.flatnonzero(inf)[0]) + 1, c, "infinite value")
-    return values, extra
-
-
-def _check_units(values: dict[str, np.ndarray], source: str, plausible_limit_mm: float) -> None:
-    """Detect channels in metres (all tiny) or micrometres (huge), and absolute gauges."""
-    for col in INSPECTION_COLUMNS:
-        finite = values[col][np.isfinite(values[col])]
-        if finite.size < 3:
-            continue  # all or almost all missing: the NaN-run check names it
-        magnitude = np.abs(finite)
-        median_abs = float(np.median(magnitude))
-        if col == "gauge_mm":
-            median_value = float(np.median(finite))
-            for nominal in _NOMINAL_GAUGES_MM:
-                if abs(median_value - nominal) < 40.0:
-                    raise InspectionError(
-                        source, None, col,
-                        f"values around {median_value:.1f} mm look like the absolute gauge; "
-                        f"gauge_mm is the deviation from nominal (subtract {nominal:g} mm)")
-        if median_abs > plausible_limit_mm:
-            raise InspectionError(
-                source, None, col,
-                f"implausible magnitude: median |value| = {median_abs:.4g} mm exceeds "
-                f"plausible_limit_mm = {plausible_limit_mm:g} mm; the values seem to be in "
-                "micrometres (divide by 1000, or declare the unit in inspections.units) or "
-                "another unit; expected millimetres")
-        if magnitude.max() > 0 and np.percentile(magnitude, 99) < 0.05 \
-                and float(np.std(finite)) < 0.01:
-            raise InspectionError(
-                source, None, col,
-                f"implausible magnitude: all values tiny (99th percentile of |value| = "
-                f"{np.percentile(magnitude, 99):.3g}, standard deviation "
-                f"{np.std(finite):.3g}); the values seem to be in metres (multiply by 1000, or "
-                "declare the unit in inspections.units); expected millimetres")
-
-
-def _is_common_step(step: float) -> bool:
-    return any(abs(step - s) <= COMMON_STEP_TOLERANCE * s for s in COMMON_STEPS_M)
-
-
-def _check_chainage(chainage: np.ndarray, source: str) -> float:
-    """No missing chainage; strictly increasing; a plausible step, not in feet.
-
-    Returns the median step (m).
-    """
-    missing = ~np.isfinite(chainage)
-    if missing.any():
-        raise InspectionError(source, int(np.flatnonzero(missing)[0]) + 1, CHAINAGE_COLUMN,
-                              "missing chainage value")
-    steps = np.diff(chainage)
-    bad = np.flatnonzero(steps <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1  # 0-based index of the offending sample
-        if steps[bad[0]] == 0:
-            raise InspectionError(source, i + 1, CHAINAGE_COLUMN,
-                                  f"duplicate chainage {chainage[i]:.6g} m (same as row {i})")
-        raise InspectionError(source, i + 1, CHAINAGE_COLUMN,
-                              f"chainage not increasing: {chainage[i]:.6g} m after "
-                              f"{chainage[i - 1]:.6g} m in row {i}")
-    step = float(np.median(steps))
-    if not MIN_STEP_M <= step <= MAX_STEP_M:
-        raise InspectionError(source, None, CHAINAGE_COLUMN,
-                              f"implausible median sampling step {step:.6g} m (expected "
-                              f"{MIN_STEP_M:g}..{MAX_STEP_M:g} m, typically 0.25 m): is the "
-                              "chainage in metres? (convert it, or declare its unit in "
-                              "inspections.units, e.g. chainage: km)")
-    # The step over the whole file (not one rounded step): a chainage rounded to 1 mm in feet
-    # still gives the step to about 1e-7 relative.
-    n_steps = float(np.sum(np.rint(steps / step)))
-    mean_step = float(chainage[-1] - chainage[0]) / n_steps
-    foot = CHAINAGE_UNITS_TO_M["ft"]
-    if not _is_common_step(mean_step) and _is_common_step(mean_step * foot):
-        common = ", ".join(f"{s:g}" for s in COMMON_STEPS_M)
-        raise InspectionError(
-            source, None, CHAINAGE_COLUMN,
-            f"chainage looks like feet: the sampling step {mean_step:.6g} is "
-            f"{mean_step * foot:.6g} m in feet, a common metric step ({common} m), but no "
-            f"common step itself; convert the chainage to metres (multiply by {foot:g}) or "
-            "declare inspections.units: {chainage: ft}")
-    return step
-
-
-def _check_sensor_faults(values: dict[str, np.ndarray], source: str, step: float,
-                         max_constant_run_m: float) -> None:
-    """Dead (all zero) and stuck (constant) channels, and long runs of one exact value."""
-    for col in INSPECTION_COLUMNS:
-        v = values[col]
-        finite_rows = np.flatnonzero(np.isfinite(v))
-        if finite_rows.size == 0:
-            continue  # all missing: the NaN-run check names it
-        finite = v[finite_rows]
-        first = int(finite_rows[0]) + 1
-        if np.all(finite == 0.0):
-            raise InspectionError(
-                source, first, col,
-                f"dead sensor: all {finite.size} values are exactly 0 (no signal); check the "
-                "sensor and the export of this channel")
-        if np.all(finite == finite[0]):
-            raise InspectionError(
-                source, first, col,
-                f"stuck sensor: all {finite.size} values are exactly {finite[0]:g} mm (zero "
-                "variance); no real track geometry is constant")
-        same = v[1:] == v[:-1]  # NaN never equals: a missing value ends a run
-        for start, stop in _runs(same):
-            n_samples = stop - start + 1
-            if n_samples * step <= max_constant_run_m + 1e-9 * step:
-                continue
-            value = float(v[start])
-            extent = (f"{n_samples} consecutive samples (rows {start + 1}-{stop + 1}, "
-                      f"{n_samples * step:g} m) read exactly {value:g} mm, longer than "
-                      f"max_constant_run_m = {max_constant_run_m:g} m")
-            if value == 0.0:
-                reason = (f"dead sensor: {extent} (or missing values written as 0 instead of "
-                          "empty cells)")
-            else:
-                reason = (f"stuck sensor: {extent}; no real track geometry is constant that "
-                          "long (raise inspections.cleaning.max_constant_run_m only for a "
-                          "coarse measuring resolution)")
-            raise InspectionError(source, start + 1, col, reason)
-
-
-@dataclasses.dataclass
-class _Grid:
-    chainage: np.ndarray       # uniform grid positions (m)
-    data: np.ndarray           # (n_grid, n_channels), NaN where missing / re-inserted
-    source_row: np.ndarray     # 1-based file row of each grid sample, 0 when re-inserted
-    inserted: np.ndarray       # bool, re-inserted (dropout) samples
-    step: float
-
-
-def grid_indices(chainage: np.ndarray) -> tuple[np.ndarray, float]:
-    """(grid index of every sample, median step): sample i sits ``k[i]`` median steps after the
-    first, each step rounded to a whole number of median steps. The cleaned campaign has
-    ``k[-1] + 1`` rows (dropouts re-inserted), so this also tells, from the chainage alone, how
-    many rows and full sections a campaign will have (ttbpipe.study.plan, before any job runs)."""
-    chainage = np.asarray(chainage, dtype=float)
-    steps = np.diff(chainage)
-    median_step = float(np.median(steps))
-    k = np.concatenate(([0], np.cumsum(np.rint(steps / median_step)))).astype(np.int64)
-    return k, median_step
-
-
-def _regrid(chainage: np.ndarray, data: np.ndarray, source: str, report: CleaningReport,
-            max_gap_m: float, sampling_tolerance: float, max_jitter: float) -> _Grid:
-    """Put the samples on a uniform grid; re-grid jitter, re-insert dropouts; errors for jumps.
-
-    Every step must lie within ``max_jitter`` of a whole multiple ``m >= 1`` of the median step
-    (else: a jump, an error naming the row); ``m - 1`` is the number of missing rows. The grid
-    step is then fitted by least squares to the positions and their grid indices, the origin is
-    the median offset of the samples; both are rounded (step to 0.1 mm, origin to 1 mm, or else to
-    1 micrometre) when the rounding moves the grid by at most ``sampling_tolerance`` (step, over
-    the whole file) or half of it (origin).
-    Samples further than ``max_jitter`` steps from the fitted grid (a drift) are errors too.
-    """
-    steps = np.diff(chainage)
-    k, median_step = grid_indices(chainage)
-    multiples = np.diff(k).astype(float)
-    step_error = np.abs(steps - multiples * median_step)
-    jumps = np.flatnonzero((step_error > max_jitter * median_step) | (multiples < 1))
-    if jumps.size:
-        i = int(jumps[0]) + 1
-        raise InspectionError(
-            source, i + 1, CHAINAGE_COLUMN,
-            f"irregular sampling: a jump in chainage, the step from {chainage[i - 1]:.6g} m "
-            f"(row {i}) to {chainage[i]:.6g} m is {steps[i - 1]:.6g} m, not a multiple of the "
-            f"{median_step:.6g} m median step (tolerance max_jitter = {max_jitter:g} step)")
-    fitted = float(np.polyfit(k, chainage, 1)[0])
-    half_tolerance = 0.5 * sampling_tolerance * median_step
-    step = round(fitted, 4) if abs(round(fitted, 4) - fitted) * k[-1] <= 2 * half_tolerance \
-        else round(fitted, 6)
-    offset = float(np.median(chainage - k * step))
-    offset = round(offset, 3) if abs(round(offset, 3) - offset) <= half_tolerance \
-        else round(offset, 6)
-    deviation = chainage - (offset + k * step)
-    far = np.flatnonzero(np.abs(deviation) > max_jitter * step)
-    if far.size:
-        i = int(far[0])
-        raise InspectionError(
-            source, i + 1, CHAINAGE_COLUMN,
-            f"irregular sampling: chainage {chainage[i]:.6g} m is {deviation[i]:+.4g} m off the "
-            f"{step:g} m grid fitted to the file (more than max_jitter = {max_jitter:g} step): "
-            "the chainage drifts")
-    dk = np.diff(k)
-    same = np.flatnonzero(dk == 0)
-    if same.size:
-        i = int(same[0]) + 1
-        raise InspectionError(
-            source, i + 1, CHAINAGE_COLUMN,
-            f"irregular sampling: chainage {chainage[i]:.6g} m falls in the same {step:g} m grid "
-            f"cell as row {i} ({chainage[i - 1]:.6g} m): a near-duplicate or a jump")
-    missing = dk - 1
-    too_long = np.flatnonzero(missing * step > max_gap_m + 1e-9 * step)
-    if too_long.size:
-        j = int(too_long[0])
-        raise InspectionError(
-            source, j + 2, CHAINAGE_COLUMN,
-            f"{int(missing[j])} rows missing between chainage {chainage[j]:.6g} m (row {j + 1}) "
-            f"and {chainage[j + 1]:.6g} m: a dropout of {missing[j] * step:g} m exceeds "
-            f"max_gap_m = {max_gap_m:g} m")
-    off_grid = np.abs(deviation) > sampling_tolerance * step
-    report.max_off_grid_m = float(np.max(np.abs(deviation)))
-    values = data
-    if off_grid.any():
-        targets = offset + k * step
-        values = np.column_stack([np.interp(targets, chainage, data[:, c])
-                                  for c in range(data.shape[1])])
-        n_off = int(off_grid.sum())
-        for c in INSPECTION_COLUMNS:
-            report.repairs["regridded"][c] = n_off
-            report.repair_runs["regridded"][c] = len(_runs(off_grid))
-        report.note(f"sampling jitter: {n_off} samples off the {step:g} m grid by more than "
-                    f"{sampling_tolerance:g} step (largest {report.max_off_grid_m:.4g} m); "
-                    "all channels re-gridded by linear interpolation", logging.WARNING)
-    n_grid = int(k[-1] - k[0]) + 1
-    position = k - k[0]
-    grid_data = np.full((n_grid, data.shape[1]), np.nan)
-    grid_data[position] = values
-    source_row = np.zeros(n_grid, dtype=np.int64)
-    source_row[position] = np.arange(1, chainage.size + 1)
-    inserted = source_row == 0
-    if inserted.any():
-        runs = _runs(inserted)
-        for c in INSPECTION_COLUMNS:
-            report.repairs["dropout_interpolated"][c] = int(inserted.sum())
-            report.repair_runs["dropout_interpolated"][c] = len(runs)
-        report.note(f"dropouts: {int(inserted.sum())} missing rows in {len(runs)} gap(s) "
-                    f"re-inserted on the grid and interpolated (longest "
-                    f"{max(b - a for a, b in runs) * step:g} m)", logging.WARNING)
-    grid_chainage = np.round(offset + (k[0] + np.arange(n_grid)) * step, 9)
-    return _Grid(grid_chainage, grid_data, source_row, inserted, step)
-
-
-def _row_of(grid: _Grid, index: int) -> tuple[int | None, str]:
-    """File row of grid sample ``index`` and a note when it is a re-inserted sample."""
-    row = int(grid.source_row[index])
-    if row:
-        return row, ""
-    before = grid.source_row[:index][grid.source_row[:index] > 0]
-    if before.size:
-        return int(before[-1]), " (a re-inserted sample after this row)"
-    return None, " (a re-inserted sample at the start)"
-
-
-def _local_median_of_neighbours(values: np.ndarray, half_width: int) -> np.ndarray:
-    """Median of the ``2 * half_width`` neighbours of each sample (itself excluded; NaN ignored)."""
-    padded = np.pad(values, half_width, constant_values=np.nan)
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_width + 1)
-    neighbours = np.delete(windows, half_width, axis=1)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows -> NaN, not flagged
-        return np.nanmedian(neighbours, axis=1)
-
 
 _D = CLEANING_DEFAULTS
 
@@ -628,7 +238,7 @@ def _clean_campaign(df: pd.DataFrame, source: str, renamed: dict[str, str],
         raise InspectionError(source, None, None, "empty table: no data rows")
 
     # 1-2. Schema and units.
-    values, extra = _check_schema(df, source)
+    values, extra = check_schema(df, source)
     if extra:
         report.ignored_columns = extra
         report.note(f"extra columns ignored (not in the cleaned table): {', '.join(extra)}")
@@ -636,78 +246,29 @@ def _clean_campaign(df: pd.DataFrame, source: str, renamed: dict[str, str],
         raise InspectionError(source, None, None, f"only {len(df)} data row(s); need at least 3")
     # 2-3. Chainage, sensor faults, units.
     chainage = values[CHAINAGE_COLUMN]
-    median_step = _check_chainage(chainage, source)
-    _check_sensor_faults(values, source, median_step, max_constant_run_m)
-    _check_units(values, source, plausible_limit_mm)
+    median_step = check_chainage(chainage, source)
+    check_sensor_faults(values, source, median_step, max_constant_run_m)
+    check_units(values, source, plausible_limit_mm)
 
     # 4. Sampling.
     data = np.column_stack([values[c] for c in INSPECTION_COLUMNS])
-    grid = _regrid(chainage, data, source, report, max_gap_m, sampling_tolerance, max_jitter)
+    grid = regrid(chainage, data, source, report, max_gap_m, sampling_tolerance, max_jitter)
     step = grid.step
     data = grid.data
 
     # 5. Missing values (original NaN and re-inserted rows together).
-    missing = np.isnan(data)
-    for c, col in enumerate(INSPECTION_COLUMNS):
-        for start, stop in _runs(missing[:, c]):
-            if (stop - start) * step > max_gap_m + 1e-9 * step:
-                first = start
-                while first < stop and grid.inserted[first]:
-                    first += 1
-                row, where = _row_of(grid, first if first < stop else start)
-                n_inserted = int(grid.inserted[start:stop].sum())
-                raise InspectionError(
-                    source, row, col,
-                    f"{stop - start} consecutive missing values ({(stop - start) * step:g} m"
-                    + (f", including {n_inserted} missing rows" if n_inserted else "")
-                    + f"){where} exceed max_gap_m = {max_gap_m:g} m; fix the file or raise "
-                    "inspections.cleaning.max_gap_m")
-        original_nan = missing[:, c] & ~grid.inserted
-        if original_nan.any():
-            report.repairs["nan_interpolated"][col] = int(original_nan.sum())
-            report.repair_runs["nan_interpolated"][col] = len(_runs(original_nan))
-
+    missing = check_missing_values(grid, source, report, max_gap_m)
     # 6. Spikes: judged against the median of the neighbours, NaN ignored.
-    half_width = 2 * max_spike_run
-    spikes = np.zeros_like(missing)
-    for c, col in enumerate(INSPECTION_COLUMNS):
-        median = _local_median_of_neighbours(data[:, c], half_width)
-        flagged = np.abs(data[:, c] - median) > spike_threshold_mm  # False where NaN
-        long_runs = 0
-        for start, stop in _runs(flagged):
-            if stop - start <= max_spike_run:
-                spikes[start:stop, c] = True
-            else:
-                long_runs += 1
-        if long_runs:
-            report.long_excursions_kept[col] = long_runs
-            report.note(f"{col}: {long_runs} run(s) of more than {max_spike_run} samples "
-                        f"deviating more than {spike_threshold_mm:g} mm from the local median "
-                        "kept as geometry (not spikes)", logging.WARNING)
-        if spikes[:, c].any():
-            report.repairs["spike_replaced"][col] = int(spikes[:, c].sum())
-            report.repair_runs["spike_replaced"][col] = len(_runs(spikes[:, c]))
-
+    spikes = find_spikes(data, report, spike_threshold_mm, max_spike_run)
     # Linear interpolation over everything to repair (ends: nearest valid value held).
-    repaired = data.copy()
-    to_fill = missing | spikes
     x = grid.chainage
-    for c in range(repaired.shape[1]):
-        good = ~to_fill[:, c]
-        if to_fill[:, c].any():
-            repaired[~good, c] = np.interp(x[~good], x[good], repaired[good, c])
-    for kind in ("nan_interpolated", "spike_replaced"):
-        if report.total(kind):
-            report.note(f"{kind}: {report.total(kind)} samples in "
-                        f"{sum(report.repair_runs[kind].values())} run(s), per channel "
-                        f"{ {k: v for k, v in report.repairs[kind].items() if v} }",
-                        logging.WARNING)
+    repaired = interpolate_flagged(data, x, missing | spikes, report)
 
     # 7. Plausibility after the repairs.
     beyond = np.abs(repaired) > plausible_limit_mm
     if beyond.any():
         i, c = (int(v) for v in np.argwhere(beyond)[0])
-        row, where = _row_of(grid, i)
+        row, where = row_of(grid, i)
         raise InspectionError(
             source, row, INSPECTION_COLUMNS[c],
             f"value {repaired[i, c]:.4g} mm{where} exceeds plausible_limit_mm = "
@@ -732,18 +293,7 @@ def _clean_campaign(df: pd.DataFrame, source: str, renamed: dict[str, str],
                 report.cross_level_rms_difference_mm)
 
     # 8. Detrending.
-    if detrend != "none":
-        span = x[-1] - x[0]
-        for c, col in enumerate(INSPECTION_COLUMNS):
-            detrended = scipy.signal.detrend(repaired[:, c], type=detrend)
-            trend = repaired[:, c] - detrended
-            report.trend_removed[col] = {
-                "mean_mm": float(np.mean(trend)),
-                "slope_mm_per_km": float((trend[-1] - trend[0]) / span * 1000.0),
-            }
-            repaired[:, c] = detrended
-        report.note(f"detrend ({detrend}) per channel: removed mean (mm) "
-                    f"{ {k: round(v['mean_mm'], 4) for k, v in report.trend_removed.items()} }")
+    detrend_channels(repaired, x, detrend, report)
 
     clean = pd.DataFrame({CHAINAGE_COLUMN: x,
                           **{col: repaired[:, c] for c, col in enumerate(INSPECTION_COLUMNS)}})

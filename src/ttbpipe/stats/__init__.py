@@ -1,4 +1,4 @@
-"""Statistics and reliability of per-sample results (the statistical half of issue 7).
+"""Statistics and reliability of per-sample results: schemas, aggregation, KDE, limits, report.
 
 * :mod:`~ttbpipe.stats.schema`: per-sample extremes and time-history table schemas, validators;
 * :mod:`~ttbpipe.stats.aggregate`: bounded-memory aggregation over batch files, Table 1,

@@ -27,7 +27,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from .schema import G_STANDARD
+from ..constants import STANDARD_GRAVITY
 
 log = logging.getLogger(__name__)
 
@@ -170,10 +170,10 @@ def default_limits(deck_track_type: str = "ballastless") -> list[Limit]:
         StaticLoadLimit("lateral_wheelset_force", "max_lateral_wheelset_force_N", 15e3, 3.0, "N",
                         "GB/T 5599-2019, H <= 15 + P0/3 kN [V]", "lateral wheelset force H"),
         ConstantLimit("carbody_vertical_acc", "max_carbody_vertical_acc_m_s2",
-                      0.13 * G_STANDARD, "m/s^2", "TB 10621, 0.13 g [M]",
+                      0.13 * STANDARD_GRAVITY, "m/s^2", "TB 10621, 0.13 g [M]",
                       "car-body vertical acceleration"),
         ConstantLimit("carbody_lateral_acc", "max_carbody_lateral_acc_m_s2",
-                      0.10 * G_STANDARD, "m/s^2", "TB 10621, 0.10 g [M]",
+                      0.10 * STANDARD_GRAVITY, "m/s^2", "TB 10621, 0.10 g [M]",
                       "car-body lateral acceleration"),
     ]
     for axis in ("vertical", "lateral"):
@@ -189,7 +189,8 @@ def default_limits(deck_track_type: str = "ballastless") -> list[Limit]:
                       f"EN 1990 A2 A2.4.4.2.1, {deck_track_type} track "
                       "(3.5 m/s^2 ballasted / 5 m/s^2 ballastless) [V]",
                       "deck vertical acceleration"),
-        ConstantLimit("deck_lateral_acc", "max_deck_lateral_acc_m_s2", 0.14 * G_STANDARD, "m/s^2",
+        ConstantLimit("deck_lateral_acc", "max_deck_lateral_acc_m_s2",
+                      0.14 * STANDARD_GRAVITY, "m/s^2",
                       "Chinese bridge inspection code 2004, 0.14 g [M]",
                       "deck lateral acceleration"),
     ]

@@ -25,10 +25,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..constants import STANDARD_GRAVITY as G_STANDARD  # noqa: F401  (limits given in g)
 from ..response_indices import RESPONSE_INDEX_REGISTRY
-
-#: Standard gravity (m/s^2), used to express limits given in g (ISO 80000-3).
-G_STANDARD = 9.80665
 
 
 class ResultsSchemaError(ValueError):

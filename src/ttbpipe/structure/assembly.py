@@ -1,11 +1,12 @@
-"""Build the track-bridge structure: mesh, per-carrier properties, DOF numbering, packed arrays.
+"""Build the track-bridge structure: DOF numbering, masses, elements and links, packed arrays.
 
 Entry points: :func:`build_structure`, :func:`apply_factors`, :func:`carrier_positions`.
 Sparse global matrices for modal analysis, the time-step check and the tests:
 :meth:`StructureModel.matrices`. Decisions and sources: docs/structure.md.
 
-Geometry: x = 0 at the start of the first approach; approach, spans, approach. Rails: one node per
-fastener, spacing adjusted to fit the line exactly. Rail 0 is the left rail (+y), rail 1 the right.
+The parts: the line geometry in :mod:`.layout`, the carriers of the random properties in
+:mod:`.carriers`, the link accumulator in :mod:`.links`, the global matrices in :mod:`.matrices`;
+their public names stay importable from here. Rail 0 is the left rail (+y), rail 1 the right.
 """
 
 from __future__ import annotations
@@ -16,179 +17,24 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
-from scipy import sparse
 
 from . import properties as P
+from .carriers import (CARRIER_PARAMETERS, PARAMETER_CARRIER, carrier_positions, factored,
+                       nominal_properties)
 from .girder import SpanReduction, hermite_shape, reduce_span
 from .kernels import StructurePacked
+from .layout import Layout, make_layout
+from .links import LinkAccumulator
+from .matrices import assemble_matrices, ballast_link_rows, pad_link_rows
+
+__all__ = ["CARRIER_PARAMETERS", "PARAMETER_CARRIER", "GAUSS3", "Layout", "StructureModel",
+           "apply_factors", "assemble_matrices", "ballast_link_rows", "build_structure",
+           "carrier_positions", "make_layout", "nominal_properties", "pad_link_rows"]
 
 log = logging.getLogger(__name__)
 
-#: Parameter names per carrier kind (the random-field interface, ttbpipe.fields.groups).
-CARRIER_PARAMETERS: dict[str, tuple[str, ...]] = {
-    "rail_element": ("rail_E", "rail_mass", "rail_Iy", "rail_Iz"),
-    "fastener": ("pad_kz", "pad_cz", "pad_ky", "pad_cy"),
-    "slab_element": ("ca_kz", "ca_cz", "ca_ky", "ca_cy"),
-    "girder_element": ("girder_E", "girder_mass", "girder_Iy", "girder_Iz"),
-}
-PARAMETER_CARRIER = {p: kind for kind, ps in CARRIER_PARAMETERS.items() for p in ps}
-
 #: 3-point Gauss-Legendre rule on [0, 1]: (xi, weight)
 GAUSS3 = ((0.5 - np.sqrt(0.15), 5 / 18), (0.5, 8 / 18), (0.5 + np.sqrt(0.15), 5 / 18))
-
-
-class _Links:
-    """Accumulates spring-damper links (CSR rows of (dof, coef), stiffness, damping)."""
-
-    def __init__(self) -> None:
-        self.dofs: list[np.ndarray] = []
-        self.coefs: list[np.ndarray] = []
-        self.k: list[float] = []
-        self.c: list[float] = []
-        self.kind: list[str] = []
-        self.tri_dofs: list[np.ndarray] = []
-        self.tri_coefs: list[np.ndarray] = []
-        self.tri_k: list[list[float]] = []
-        self.tri_c: list[list[float]] = []
-        self.tri_kind: list[str] = []
-
-    def add(self, dofs, coefs, k: float, c: float, kind: str) -> None:
-        dofs = np.asarray(dofs, dtype=np.int64)
-        coefs = np.asarray(coefs, dtype=float)
-        keep = coefs != 0.0
-        self.dofs.append(dofs[keep]); self.coefs.append(coefs[keep])
-        self.k.append(float(k)); self.c.append(float(c)); self.kind.append(kind)
-
-    def add_triple(self, rows, k3, c3, kind: str) -> None:
-        """Three links (vertical, lateral, roll), each (dofs, coefs), over one shared DOF list."""
-        union: dict[int, int] = {}
-        for dofs, _ in rows:
-            for q in dofs:
-                union.setdefault(int(q), len(union))
-        coef = np.zeros((len(union), 3))
-        for r, (dofs, coefs) in enumerate(rows):
-            for q, c in zip(dofs, coefs):
-                coef[union[int(q)], r] += c
-        keep = np.any(coef != 0.0, axis=1)
-        self.tri_dofs.append(np.fromiter(union, dtype=np.int64)[keep])
-        self.tri_coefs.append(coef[keep])
-        self.tri_k.append([float(v) for v in k3]); self.tri_c.append([float(v) for v in c3])
-        self.tri_kind.append(kind)
-
-    def triple_arrays(self):
-        """(ptr, dof, coef (3 per dof, flattened), k (3 per triple), c (3 per triple))."""
-        ptr = np.zeros(len(self.tri_k) + 1, dtype=np.int64)
-        ptr[1:] = np.cumsum([d.size for d in self.tri_dofs])
-        if not self.tri_k:
-            return ptr, np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros(0)
-        return (ptr, np.concatenate(self.tri_dofs).astype(np.int64),
-                np.concatenate(self.tri_coefs).ravel(), np.array(self.tri_k, float).ravel(),
-                np.array(self.tri_c, float).ravel())
-
-    def arrays(self):
-        """CSR arrays in insertion order (sorting by term count measured no faster)."""
-        self.order = np.arange(len(self.k))
-        ptr = np.zeros(len(self.k) + 1, dtype=np.int64)
-        ptr[1:] = np.cumsum([d.size for d in self.dofs])
-        dof = np.concatenate(self.dofs) if self.dofs else np.zeros(0, np.int64)
-        coef = np.concatenate(self.coefs) if self.coefs else np.zeros(0)
-        return ptr, dof.astype(np.int64), coef, np.array(self.k, float), np.array(self.c, float)
-
-
-@dataclass
-class Layout:
-    """Geometry of the line (independent of the random properties)."""
-
-    total_m: float
-    bridge_start_m: float
-    bridge_end_m: float
-    span_starts_m: np.ndarray
-    span_lengths_m: np.ndarray
-    rail_x: np.ndarray                     # rail node (= fastener) positions
-    rail_zone: np.ndarray                  # "bridge" | "approach" per node
-    slab_units: list = field(default_factory=list)   # list of (zone, node_x array)
-    girder_n_el: list = field(default_factory=list)  # elements per span
-
-    @property
-    def n_spans(self) -> int:
-        return self.span_lengths_m.size
-
-
-def _slab_units(a: float, b: float, cfg: Mapping[str, Any], zone: str,
-                span_edges: list[float] | None = None) -> list:
-    """Slab units covering [a, b]: one continuous unit, or discrete units (per span on bridges)."""
-    el = float(cfg["element_length_m"])
-    units = []
-    if cfg["type"] == "continuous":
-        n = max(1, int(round((b - a) / el)))
-        return [(zone, np.linspace(a, b, n + 1))]
-    if cfg["type"] != "discrete":
-        raise ValueError(f"structure.slab.type: {cfg['type']!r}; expected continuous | discrete")
-    edges = span_edges if span_edges is not None else [a, b]
-    joint = float(cfg["joint_m"])
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        n_u = max(1, int(round((hi - lo) / (float(cfg["unit_length_m"]) + joint))))
-        pitch = (hi - lo) / n_u
-        for u in range(n_u):
-            ua, ub = lo + u * pitch + joint / 2, lo + (u + 1) * pitch - joint / 2
-            n = max(1, int(round((ub - ua) / el)))
-            units.append((zone, np.linspace(ua, ub, n + 1)))
-    return units
-
-
-def make_layout(cfg: Mapping[str, Any]) -> Layout:
-    """Line geometry from a resolved structure config."""
-    lay = cfg["layout"]
-    spans = np.asarray(lay["spans_m"], dtype=float)
-    if spans.size and np.any(spans <= 0):
-        raise ValueError(f"structure.layout.spans_m must be positive, got {spans.tolist()}")
-    approach = float(lay["approach_length_m"])
-    if approach < 0:
-        raise ValueError("structure.layout.approach_length_m must be >= 0")
-    total = 2 * approach + float(spans.sum())
-    if total <= 0:
-        raise ValueError("structure.layout: empty line (no spans and no approaches)")
-    starts = approach + np.concatenate([[0.0], np.cumsum(spans)[:-1]]) if spans.size else np.zeros(0)
-    bs, be = approach, approach + float(spans.sum())
-    spacing = float(cfg["fastener"]["spacing_m"])
-    n_el = max(2, int(round(total / spacing)))
-    rail_x = np.linspace(0.0, total, n_el + 1)
-    zone = np.where((rail_x >= bs - 1e-9) & (rail_x <= be + 1e-9) & (spans.size > 0),
-                    "bridge", "approach")
-    layout = Layout(total, bs, be, starts, spans, rail_x, zone)
-    if lay["bridge_track"] == "slab" and spans.size:
-        edges = list(np.concatenate([starts, [be]]))
-        layout.slab_units += _slab_units(bs, be, cfg["slab"], "bridge", edges)
-    if lay["approach_track"] == "slab" and approach > 0:
-        layout.slab_units += _slab_units(0.0, bs, cfg["slab"], "approach")
-        layout.slab_units += _slab_units(be, total, cfg["slab"], "approach")
-    layout.slab_units.sort(key=lambda u: u[1][0])
-    el = float(cfg["girder"]["element_length_m"])
-    layout.girder_n_el = [max(4, int(round(L / el))) for L in spans]
-    return layout
-
-
-def nominal_properties(cfg: Mapping[str, Any], layout: Layout) -> dict[str, np.ndarray]:
-    """Per-carrier nominal property arrays (SI), before random factors.
-
-    Rail and fastener arrays have shape (2, n) (left, right rail); slab and girder arrays (n,).
-    """
-    r, f, ca, g = cfg["rail"], cfg["fastener"], cfg["ca"], cfg["girder"]
-    n_rel = layout.rail_x.size - 1
-    n_fas = layout.rail_x.size
-    n_sel = sum(u[1].size - 1 for u in layout.slab_units)
-    n_gel = int(sum(layout.girder_n_el))
-    full = lambda v, shape: np.full(shape, float(v))  # noqa: E731
-    return {
-        "rail_E": full(r["E_Pa"], (2, n_rel)), "rail_mass": full(r["mass_kg_m"], (2, n_rel)),
-        "rail_Iy": full(r["Iy_m4"], (2, n_rel)), "rail_Iz": full(r["Iz_m4"], (2, n_rel)),
-        "pad_kz": full(f["kz_N_m"], (2, n_fas)), "pad_cz": full(f["cz_Ns_m"], (2, n_fas)),
-        "pad_ky": full(f["ky_N_m"], (2, n_fas)), "pad_cy": full(f["cy_Ns_m"], (2, n_fas)),
-        "ca_kz": full(ca["kz_N_m2"], n_sel), "ca_cz": full(ca["cz_Ns_m2"], n_sel),
-        "ca_ky": full(ca["ky_N_m2"], n_sel), "ca_cy": full(ca["cy_Ns_m2"], n_sel),
-        "girder_E": full(g["E_Pa"], n_gel), "girder_mass": full(g["mass_kg_m"], n_gel),
-        "girder_Iy": full(g["Iy_m4"], n_gel), "girder_Iz": full(g["Iz_m4"], n_gel),
-    }
 
 
 @dataclass
@@ -239,7 +85,7 @@ def build_structure(config: Mapping[str, Any] | None = None,
     layout = make_layout(cfg)
     props = nominal_properties(cfg, layout)
     if factors:
-        props = _factored(props, factors)
+        props = factored(props, factors)
     return _assemble(cfg, layout, props)
 
 
@@ -253,51 +99,8 @@ def apply_factors(model_or_properties, factors: Mapping[str, np.ndarray]):
     """
     if isinstance(model_or_properties, StructureModel):
         m = model_or_properties
-        return _assemble(m.config, m.layout, _factored(m.properties, factors))
-    return _factored(model_or_properties, factors)
-
-
-def _factored(props: Mapping[str, np.ndarray], factors: Mapping[str, np.ndarray]) -> dict:
-    out = {k: np.array(v, dtype=float, copy=True) for k, v in props.items()}
-    for name, fac in factors.items():
-        if name not in PARAMETER_CARRIER:
-            raise ValueError(f"factor {name!r}: unknown parameter; expected one of "
-                             f"{sorted(PARAMETER_CARRIER)}")
-        fac = np.asarray(fac, dtype=float)
-        base = out[name]
-        n = base.shape[-1]
-        if base.ndim == 2 and fac.size == 2 * n:
-            fac = fac.reshape(2, n)
-        elif fac.shape != (n,) and not (base.ndim == 2 and fac.shape == base.shape):
-            raise ValueError(f"factor {name!r}: {fac.size} values, but the structure has {n} "
-                             f"{PARAMETER_CARRIER[name]} carriers"
-                             + (f" (or {2 * n} for both rails)" if base.ndim == 2 else "")
-                             + "; sample the field at carrier_positions(model)")
-        if not np.all(np.isfinite(fac)) or np.any(fac <= 0):
-            bad = int(np.sum(~np.isfinite(fac) | (fac <= 0)))
-            raise ValueError(f"factor {name!r}: {bad} non-positive or non-finite values; a "
-                             "property factor must be > 0 (truncate the field's marginal)")
-        out[name] = base * fac
-    return out
-
-
-def carrier_positions(model: StructureModel) -> dict[str, np.ndarray]:
-    """x (m) of every carrier, per kind, in the order factor arrays must follow.
-
-    rail_element: element midpoints (shared by both rails); fastener: rail node positions (one
-    seat per rail per position); slab_element: element midpoints of all slab units; girder_element:
-    element midpoints of each span's FE mesh, span after span.
-    """
-    lay = model.layout
-    x = lay.rail_x
-    girder = [s.node_x[:-1] + 0.5 * np.diff(s.node_x) for s in model.spans]
-    return {
-        "rail_element": 0.5 * (x[:-1] + x[1:]),
-        "fastener": x.copy(),
-        "slab_element": model.slab_elements.mean(axis=1) if model.slab_elements.size
-        else np.zeros(0),
-        "girder_element": np.concatenate(girder) if girder else np.zeros(0),
-    }
+        return _assemble(m.config, m.layout, factored(m.properties, factors))
+    return factored(model_or_properties, factors)
 
 
 def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> StructureModel:
@@ -424,7 +227,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
     inv_mass[fixed] = 0.0
 
     # ---- links ------------------------------------------------------------------------------
-    links = _Links()
+    links = LinkAccumulator()
     slab_elems = []        # (xa, xb, dof_a, zone)
     for (zone, xs), d0 in zip(layout.slab_units if has_track else [], slab_node_dof0):
         for i in range(xs.size - 1):
@@ -599,138 +402,3 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                           slab_element_node0=node_a, fixed=fixed,
                           link_kinds=[links.kind[i] for i in links.order],
                           triple_kinds=list(links.tri_kind))
-
-
-def assemble_matrices(packed: StructurePacked):
-    """Global sparse (M, K, C), CSR, from the packed arrays (reference for the kernels).
-
-    Fixed DOFs keep their (unit) mass and get no special treatment here; callers restrict to
-    ``~model.fixed``.
-    """
-    n = packed.n_dof
-    rows, cols, kv, cv = [], [], [], []
-    # beams
-    a, b, L = packed.beam_dof_a, packed.beam_dof_b, packed.beam_L
-    for plane, EI in ((0, packed.beam_EIv), (1, packed.beam_EIl)):
-        d = np.stack([a + 2 * plane, a + 2 * plane + 1, b + 2 * plane, b + 2 * plane + 1], 1)
-        s = EI / L ** 3
-        ke = np.empty((L.size, 4, 4))
-        base = [[12, 6, -12, 6], [6, 4, -6, 2], [-12, -6, 12, -6], [6, 2, -6, 4]]
-        powers = [[0, 1, 0, 1], [1, 2, 1, 2], [0, 1, 0, 1], [1, 2, 1, 2]]
-        for i in range(4):
-            for j in range(4):
-                ke[:, i, j] = s * base[i][j] * L ** powers[i][j]
-        rows.append(np.repeat(d, 4, axis=1).ravel()); cols.append(np.tile(d, 4).ravel())
-        kv.append(ke.ravel()); cv.append(np.zeros(ke.size))
-    d = np.stack([a + 4, b + 4], 1)
-    kt = packed.beam_GK / L
-    ke = np.stack([kt, -kt, -kt, kt], 1)
-    rows.append(np.repeat(d, 2, axis=1).ravel()); cols.append(np.tile(d, 2).ravel())
-    kv.append(ke.ravel()); cv.append(np.zeros(ke.size))
-    # links
-    for l in range(packed.link_k.size):
-        j0, j1 = packed.link_ptr[l], packed.link_ptr[l + 1]
-        dof, coef = packed.link_dof[j0:j1], packed.link_coef[j0:j1]
-        outer = np.outer(coef, coef).ravel()
-        rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
-        kv.append(packed.link_k[l] * outer); cv.append(packed.link_c[l] * outer)
-    # link triples: three links over one DOF list
-    for t in range(packed.tri_k.size // 3):
-        j0, j1 = packed.tri_ptr[t], packed.tri_ptr[t + 1]
-        dof = packed.tri_dof[j0:j1]
-        coef = packed.tri_coef[3 * j0:3 * j1].reshape(-1, 3)
-        kt = (coef * packed.tri_k[3 * t:3 * t + 3]) @ coef.T
-        ct = (coef * packed.tri_c[3 * t:3 * t + 3]) @ coef.T
-        rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
-        kv.append(kt.ravel()); cv.append(ct.ravel())
-    # rail pads and ballast: the generic three-row forms (the kernels compute them in place)
-    for dof, coef, k3, c3 in (*pad_link_rows(packed), *ballast_link_rows(packed)):
-        kt = (coef * k3) @ coef.T
-        ct = (coef * c3) @ coef.T
-        rows.append(np.repeat(dof, dof.size)); cols.append(np.tile(dof, dof.size))
-        kv.append(kt.ravel()); cv.append(ct.ravel())
-    # spans
-    mrows, mcols, mv = [np.arange(packed.n_diag)], [np.arange(packed.n_diag)], []
-    with np.errstate(divide="ignore"):
-        diag = np.where(packed.inv_mass[:packed.n_diag] > 0,
-                        1.0 / packed.inv_mass[:packed.n_diag], 1.0)
-    mv.append(diag)
-    for s in range(packed.span_dof0.size):
-        o, m, base = packed.span_dof0[s], packed.span_n[s], packed.span_mat0[s]
-        idx = np.arange(o, o + m)
-        r_, c_ = np.repeat(idx, m), np.tile(idx, m)
-        rows.append(r_); cols.append(c_)
-        kv.append(packed.span_K[base:base + m * m]); cv.append(packed.span_C[base:base + m * m])
-        Minv = packed.span_Minv[base:base + m * m].reshape(m, m)
-        Mb = _span_mass_from_inverse(Minv)
-        mrows.append(r_); mcols.append(c_); mv.append(Mb.ravel())
-    R, Cc = np.concatenate(rows), np.concatenate(cols)
-    K = sparse.coo_matrix((np.concatenate(kv), (R, Cc)), shape=(n, n)).tocsr()
-    C = sparse.coo_matrix((np.concatenate(cv), (R, Cc)), shape=(n, n)).tocsr()
-    M = sparse.coo_matrix((np.concatenate(mv), (np.concatenate(mrows), np.concatenate(mcols))),
-                          shape=(n, n)).tocsr()
-    return M, K, C
-
-
-def pad_link_rows(packed: StructurePacked):
-    """Yield (dofs, coef (n, 3), k3, c3) of every rail pad: the vertical, lateral and roll
-    relative displacements as linear forms of the DOFs (the paper's eq. 22 with the seat's shape
-    functions), from the compact pad arrays. Reference for :func:`kernels._pad_forces`."""
-    d_f = float(packed.pad_foot_depth)
-    t_half = float(packed.pad_seat_half_thickness)
-    n_slab, n_ballast = int(packed.pad_group[0]), int(packed.pad_group[1])
-    for p in range(packed.pad_rail.size):
-        rd = int(packed.pad_rail[p])
-        xi, L, e = packed.pad_geom[3 * p:3 * p + 3]
-        rows = {rd: [1.0, 0.0, 0.0], rd + 2: [0.0, 1.0, 0.0], rd + 4: [0.0, d_f, 1.0]}
-        if p < n_slab:
-            da, db = int(packed.pad_seat_a[p]), int(packed.pad_seat_b[p])
-            N = hermite_shape(xi, L)
-            for q, n_q in zip((da, da + 1, db, db + 1), N):
-                rows.setdefault(q, [0.0, 0.0, 0.0])[0] -= n_q
-            for q, n_q in zip((da + 2, da + 3, db + 2, db + 3), N):
-                rows.setdefault(q, [0.0, 0.0, 0.0])[1] -= n_q
-            for q, w in ((da + 4, 1.0 - xi), (db + 4, xi)):
-                r = rows.setdefault(q, [0.0, 0.0, 0.0])
-                r[0] -= e * w
-                r[1] += t_half * w
-                r[2] -= w
-        elif p < n_slab + n_ballast:
-            sd = int(packed.pad_seat_a[p])
-            rows[sd] = [-1.0, 0.0, 0.0]
-            rows[sd + 1] = [0.0, -1.0, 0.0]
-            rows[sd + 2] = [-e, 0.0, -1.0]
-        dof = np.fromiter(rows, dtype=np.int64)
-        coef = np.array([rows[q] for q in rows])
-        yield dof, coef, packed.pad_k[3 * p:3 * p + 3], packed.pad_c[3 * p:3 * p + 3]
-
-
-def ballast_link_rows(packed: StructurePacked):
-    """Yield (dofs, coef (n, 3), k3, c3) of the ballasted track: per block the sleeper-block,
-    block-subgrade and block-next-block springs, per sleeper its lateral resistance (as a row
-    with one active direction). Reference for :func:`kernels._ballast_forces`."""
-    k, c, e0 = packed.bal_k, packed.bal_c, float(packed.bal_half_gauge)
-    for j in range(packed.bal_sleeper.size):
-        sd = int(packed.bal_sleeper[j])
-        for side in range(2):
-            e = e0 if side == 0 else -e0
-            bd = int(packed.bal_block[j]) + side
-            nxt = bool(packed.bal_next[j])
-            dof = np.array([sd, sd + 2, bd] + ([bd + 2] if nxt else []), dtype=np.int64)
-            coef = np.zeros((dof.size, 3))
-            coef[:3, 0] = [1.0, e, -1.0]
-            coef[2, 1] = 1.0
-            if nxt:
-                coef[2, 2], coef[3, 2] = 1.0, -1.0
-            yield (dof, coef, np.array([k[0], k[1], k[2] if nxt else 0.0]),
-                   np.array([c[0], c[1], c[2] if nxt else 0.0]))
-        yield (np.array([sd + 1], dtype=np.int64), np.array([[1.0, 0.0, 0.0]]),
-               np.array([k[3], 0.0, 0.0]), np.array([c[3], 0.0, 0.0]))
-
-
-def _span_mass_from_inverse(Minv: np.ndarray) -> np.ndarray:
-    """Mass block from the stored inverse; fixed coordinates (zero rows) get a unit mass."""
-    free = np.any(Minv != 0, axis=1)
-    M = np.eye(Minv.shape[0])
-    M[np.ix_(free, free)] = np.linalg.inv(Minv[np.ix_(free, free)])
-    return M

@@ -1,7 +1,7 @@
 """Modal analysis of the structure: natural frequencies and mode shapes (scipy sparse eigsh).
 
 The global M and K are assembled from the same packed arrays the time-loop kernels use
-(:func:`~ttbpipe.structure.assembly.assemble_matrices`), restricted to the free DOFs, and solved
+(:func:`~ttbpipe.structure.matrices.assemble_matrices`), restricted to the free DOFs, and solved
 with ARPACK in shift-invert mode about sigma (lowest modes first). Each mode is classified by the
 share of its kinetic energy in each component (rails, slab, sleepers/ballast, piers, girder
 vertical/lateral/torsion), which is how "the first vertical / lateral girder mode" of the coupled

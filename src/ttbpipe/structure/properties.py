@@ -20,7 +20,7 @@ from typing import Any, Mapping
 #: CHN60 rail, one rail. [V: Hindawi SV 2020/6878252 tab 2] unless tagged otherwise.
 RAIL = {
     "E_Pa": 2.059e11,                # Young's modulus
-    "G_Pa": 7.9e10,                  # shear modulus (steel; physics.md bug 14: not 2e11)
+    "G_Pa": 7.9e10,                  # shear modulus of steel, not 2e11 (physics.md sec. 7 item 14)
     "mass_kg_m": 60.64,              # mass per unit length
     "Iy_m4": 3.217e-5,               # second moment for VERTICAL bending (about the y axis)
     "Iz_m4": 5.24e-6,                # second moment for LATERAL bending (about the z axis)

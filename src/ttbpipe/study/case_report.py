@@ -1,4 +1,4 @@
-"""Figures, tables and summaries of the paper's case studies (issue 8; docs/validation.md).
+"""Figures, tables and summaries of the seed paper's case studies (docs/validation.md).
 
 :func:`sweep_report` (case 1: Figs. 6-8, eq. 55) and :func:`compare_report` (cases 2-4: Table 1,
 Figs. 9-17) turn the case outputs into the figures and the short markdown summary that
@@ -20,8 +20,6 @@ from .cases import (bridge_frequencies, compare_histories, forecast_limits, reso
 from .samples import resolve_simulation
 
 log = logging.getLogger(__name__)
-
-_G = 9.80665
 
 
 def _plt():

@@ -1,4 +1,4 @@
-"""The seed paper's section 5 case studies as ready-made studies (issue 8; docs/validation.md).
+"""The seed paper's section 5 case studies as ready-made studies (docs/validation.md).
 
 * :func:`apply_scale`: ``--config scale=small`` (or ``medium``) merges a case file's overlay;
 * case 1 (section 5.1): :func:`sweep_speeds`, :func:`run_speed` (one deterministic coupled run
@@ -21,6 +21,7 @@ from typing import Any, Mapping, MutableMapping, Sequence
 import numpy as np
 import pandas as pd
 
+from ..dates import months_between
 from .samples import (build_case, extremes_from_run, mean_spectrum_seed, resolve_simulation)
 
 log = logging.getLogger(__name__)
@@ -278,7 +279,6 @@ def forecast_limits(extremes: pd.DataFrame, column: str, base_date: str) -> pd.D
     each level (scenario labels ``<target date>_p<level>``): lower / general / upper limits =
     the lowest / middle / highest level. Columns: ``target_date``, ``months``, ``level``,
     ``mean``, ``n_samples``."""
-    from ..tipm.stages import months_between
     from .design import parse_forecast_label
 
     rows = []

@@ -32,7 +32,6 @@ inputs themselves come from the stages that own them, each seeded the same way (
 
 from __future__ import annotations
 
-import datetime as _dt
 import logging
 import zlib
 from typing import Any, Iterable, Mapping
@@ -40,12 +39,15 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
+from .. import streams
 from ..configuration import section_defaults, validate_section
+from ..dates import add_months
 
 log = logging.getLogger(__name__)
 
-#: Fixed stream number of the simulation stage in the study's seed tree.
-STREAM_ID = 7
+#: Stream id of the study's samples in the study's seed tree
+#: (:data:`ttbpipe.streams.SIMULATION`).
+STREAM_ID = streams.SIMULATION
 
 SCENARIO_KINDS = ("irregularity", "forecast", "fields", "fields_mc", "irregularity_mc")
 #: Label of the plain Monte Carlo irregularity scenario (case 3).
@@ -76,16 +78,6 @@ def sample_seed_sequence(study_seed: int, scenario: str, sample_index: int) -> n
         raise ValueError(f"sample index must be >= 0, got {sample_index}")
     return np.random.SeedSequence([int(study_seed), STREAM_ID, scenario_key(scenario),
                                    int(sample_index)])
-
-
-def add_months(date: str, months: float) -> str:
-    """ISO date ``months`` (rounded to whole months) after ``date``, day clamped to the month."""
-    import calendar
-
-    base = _dt.date.fromisoformat(date)
-    index = base.month - 1 + int(round(months))
-    year, month = base.year + index // 12, index % 12 + 1
-    return _dt.date(year, month, min(base.day, calendar.monthrange(year, month)[1])).isoformat()
 
 
 def scenario_labels(study: Mapping[str, Any], latest_campaign: str,

@@ -55,7 +55,7 @@ FIELD_KINDS = ("fields", "fields_mc")
 def _campaign_rows_cached(path: str, size: int, mtime_ns: int, mapping_json: str
                           ) -> tuple[int, float]:
     from ..inspection.format import CHAINAGE_COLUMN, InspectionError, read_campaign
-    from ..inspection.validate import grid_indices
+    from ..inspection.grid import grid_indices
 
     frame = read_campaign(path, check_name=False, **json.loads(mapping_json))
     if CHAINAGE_COLUMN not in frame.columns:

@@ -20,6 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
+from .. import streams
 from ..configuration import section_defaults, validate_section
 from ..response_indices import PER_CAR, PER_SPAN
 from ..stats.schema import RESPONSE_INDICES
@@ -42,7 +43,7 @@ def resolve_simulation(section: Mapping[str, Any] | None) -> dict[str, Any]:
 
 def mean_spectrum_seed(study_seed: int) -> int:
     """Seed of the single deterministic irregularity of the fields scenarios (same for all)."""
-    seq = np.random.SeedSequence([int(study_seed), STREAM_ID, scenario_key("mean_spectrum")])
+    seq = np.random.SeedSequence([int(study_seed), STREAM_ID, scenario_key(streams.MEAN_SPECTRUM_LABEL)])
     return int(seq.generate_state(1)[0])
 
 
@@ -50,13 +51,12 @@ def mc_fields_seed(study_seed: int) -> int:
     """Seed of the plain Monte Carlo fields scenarios (``fields_mc``, case 2's MCM reference):
     a stream of its own, so that MC sample i is independent of KLE sample i (the two estimates
     of Fig. 10 must not share their random numbers)."""
-    seq = np.random.SeedSequence([int(study_seed), STREAM_ID, scenario_key("fields_mc")])
+    seq = np.random.SeedSequence([int(study_seed), STREAM_ID, scenario_key(streams.MC_FIELDS_LABEL)])
     return int(seq.generate_state(1)[0])
 
 
-#: Stream of the Monte Carlo irregularity profiles of the study (ttbpipe.tipm.profiles.profile_rng;
-#: 0-2 are the TIPM's representative, forecast and envelope streams).
-STREAM_MC_PROFILES = 3
+#: Stream of the study's plain Monte Carlo irregularity profiles (ttbpipe.streams).
+STREAM_MC_PROFILES = streams.STUDY_MC_PROFILES
 
 
 @functools.lru_cache(maxsize=2)

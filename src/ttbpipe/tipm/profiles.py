@@ -8,8 +8,9 @@ Seeds (project rule: a sample's random numbers depend only on the study seed and
 profile ``sample_index`` of campaign ``date`` uses
 ``SeedSequence([study_seed, yyyymmdd(date), stream, sample_index])`` with ``stream`` =
 :data:`STREAM_REPRESENTATIVE` (0) for the representative sets of that campaign and
-:data:`STREAM_FORECAST` (1) for the forecast states based on that campaign, so adding campaigns,
-changing the number of samples elsewhere or the core count never changes a profile.
+:data:`STREAM_FORECAST` (1) for the forecast states based on that campaign (every stream id:
+:mod:`ttbpipe.streams`), so adding campaigns, changing the number of samples elsewhere or the core
+count never changes a profile.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from .. import streams
 from ..irregularity.synthesis import synthesize_from_psd_table
 
 __all__ = ["profile_rng", "profiles_from_psd_sets", "STREAM_REPRESENTATIVE", "STREAM_FORECAST",
@@ -28,7 +30,10 @@ __all__ = ["profile_rng", "profiles_from_psd_sets", "STREAM_REPRESENTATIVE", "ST
 
 log = logging.getLogger(__name__)
 
-STREAM_REPRESENTATIVE, STREAM_FORECAST, STREAM_MONTE_CARLO = 0, 1, 2
+#: Stream ids of the campaign seed tree (:mod:`ttbpipe.streams`, the registry).
+STREAM_REPRESENTATIVE = streams.TIPM_REPRESENTATIVE
+STREAM_FORECAST = streams.TIPM_FORECAST
+STREAM_MONTE_CARLO = streams.TIPM_MONTE_CARLO
 
 
 def date_key(date: str) -> int:

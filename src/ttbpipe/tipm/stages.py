@@ -7,7 +7,6 @@ the scripts only read inputs and write outputs. Defaults: :data:`DEFAULTS`, the 
 
 from __future__ import annotations
 
-import datetime as _dt
 import logging
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -15,7 +14,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from .. import streams
 from ..configuration import section_defaults, validate_section
+from ..dates import add_months, months_between
 from ..io import read_table
 from .distribution import (FIT_COLUMNS, MIN_SECTIONS_FOR_FIT, SUMMARY_COLUMNS,
                            fit_ordinate_distributions, summarize_fits)
@@ -25,7 +26,7 @@ from .profiles import (STREAM_FORECAST, STREAM_MONTE_CARLO, STREAM_REPRESENTATIV
                        profiles_from_psd_sets)
 from .selection import TIPMSelection, TIPMSelector, selection_metrics
 
-__all__ = ["DEFAULTS", "resolve_config", "load_population", "population_dates", "months_between",
+__all__ = ["DEFAULTS", "resolve_config", "load_population", "population_dates",
            "select_stage", "profiles_stage", "distribution_stage", "evolution_stage",
            "forecast_base", "sections_as_selection", "forecast_stage", "validation_stage"]
 
@@ -53,12 +54,6 @@ def population_dates(all_dates: Sequence[str], date: str, window: str | int) -> 
     if window < 1:
         raise ValueError(f"tipm.population_campaigns must be 'all' or >= 1, got {window}")
     return earlier[-window:]
-
-
-def months_between(a: str, b: str) -> float:
-    """Months from date ``a`` to date ``b`` (calendar months plus the day difference / 30.44)."""
-    da, db = _dt.date.fromisoformat(a), _dt.date.fromisoformat(b)
-    return (db.year - da.year) * 12 + (db.month - da.month) + (db.day - da.day) / (365.25 / 12)
 
 
 def load_population(paths: Sequence[str | Path], wavelength_band_m) -> list[PSDPopulation]:
@@ -193,9 +188,8 @@ def forecast_stage(model: SpectralEvolution, selection: TIPMSelection, base_date
     mc_band, _ = model.envelope(selection.psd_mm2_m, max(steps), levels, int(f["monte_carlo_paths"]),
                                 rng, at_steps=unique_steps)
     rows, states, psd_sets = [], [], []
-    base = _dt.date.fromisoformat(base_date)
     for h, n_steps in zip(horizons, steps):
-        target = _add_months(base, int(round(h))).isoformat()
+        target = add_months(base_date, h)
         for li, p in enumerate(levels):
             fixed = model.forecast_fixed(selection.psd_mm2_m, n_steps, p)
             mc = mc_band[unique_steps.index(n_steps), li]
@@ -244,7 +238,8 @@ def validation_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any],
     observed = [(months_between(base_date, str(p.sections["campaign_date"].iloc[0])), p) for p in held]
     levels = tuple(float(x) for x in v["band"])
     rng = np.random.default_rng(np.random.SeedSequence([int(study_seed), date_key(base_date),
-                                                        STREAM_MONTE_CARLO, 1]))
+                                                        STREAM_MONTE_CARLO,
+                                                        streams.TIPM_VALIDATION_SUBSTREAM]))
     coverage, _, tqi_band = forecast_coverage(model, base, observed, levels,
                                               int(v["monte_carlo_paths"]), rng)
     n_steps = tqi_band.shape[0]
@@ -285,10 +280,3 @@ def validation_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any],
                "coverage_fixed_p": per_channel["coverage_fixed_p"].to_dict(),
                "model": model.metadata()}
     return coverage, pd.DataFrame(rows), summary
-
-
-def _add_months(date: _dt.date, months: int) -> _dt.date:
-    import calendar
-    index = date.month - 1 + months
-    year, month = date.year + index // 12, index % 12 + 1
-    return _dt.date(year, month, min(date.day, calendar.monthrange(year, month)[1]))

@@ -5,7 +5,7 @@ at frequency f_i in 0.5-40 Hz,
 
     W_i = 3.57 [ (A_i^3 / f_i) F(f_i) ]^0.1,       W = ( sum_i W_i^10 )^0.1
 
-with the frequency weighting (F = 400/f^2, NOT 400/f: classic bug 10)
+with the frequency weighting (F = 400/f^2, NOT 400/f, a common error: physics.md section 7 item 10)
 
     vertical: F = 0.325 f^2 (0.5-5.9 Hz), 400/f^2 (5.9-20 Hz), 1 (> 20 Hz)
     lateral:  F = 0.8 f^2   (0.5-5.4 Hz), 650/f^2 (5.4-26 Hz), 1 (> 26 Hz).

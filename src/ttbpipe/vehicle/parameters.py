@@ -7,8 +7,8 @@ value not re-read, [A] assumed here (typical value, no single source; override i
 Vertical set: Zeng et al. 2014, Shock and Vibration 2014:304219, Table 1 [V]. Zeng's suspension
 values are per bogie (secondary) and per wheelset (primary); a bogie has two air springs and a
 wheelset two axle-box spring groups, so the per-spring values below are half of Zeng's
-(physics.md section 6 and classic bug 8: with the per-bogie values the car-body bounce is 0.75 Hz
-and the bogie bounce 6 Hz, which is what the paper reports).
+(physics.md section 6, and section 7 item 8 on suspension units: with per-bogie values the
+car-body bounce is 0.75 Hz and the bogie bounce 6 Hz, which is what the paper reports).
 
 Lateral/longitudinal set: Zhai, "Vehicle-track coupled dynamics", high-speed passenger car
 (physics.md section 6, [V]); these are not CRH-specific.
@@ -23,9 +23,12 @@ import logging
 from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
+from ..constants import STANDARD_GRAVITY
+
 log = logging.getLogger(__name__)
 
-GRAVITY = 9.81  # m/s^2
+#: Gravity acting on the train (m/s^2): :data:`ttbpipe.constants.STANDARD_GRAVITY`.
+GRAVITY = STANDARD_GRAVITY
 
 
 @dataclass
