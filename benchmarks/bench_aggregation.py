@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ttbpipe import io
-from ttbpipe.stats import aggregate as A
+from ttbpipe.stats import streaming as A
 from ttbpipe.stats.limits import default_limits, LimitContext
 from ttbpipe.stats.reliability import assess_limits
 from ttbpipe.stats.schema import example_extremes, example_histories

@@ -1,4 +1,5 @@
-"""Report first page (reStructuredText) and figures of ttbpipe.stats.
+"""Report first page (reStructuredText, ttbpipe.study.report_pages), figures of ttbpipe.stats and
+the `ttbpipe stats-report` command.
 
 References: docutils (the parser the Snakemake report uses) must accept the page without warnings;
 figures are checked for units on the axes and for the plotted data (PDF area 1 within 2 %, the
@@ -12,11 +13,12 @@ import pandas as pd
 import pytest
 
 from ttbpipe import io
-from ttbpipe.stats import aggregate as A
+from ttbpipe.stats import streaming as A
+from ttbpipe.stats import tables as T
 from ttbpipe.stats import limits as L
 from ttbpipe.stats import plots as P
 from ttbpipe.stats.reliability import ReliabilitySettings, assess_limits, convergence_curve
-from ttbpipe.stats.report import first_page_rst, write_first_page
+from ttbpipe.study.report_pages import first_page_rst, write_first_page
 from ttbpipe.stats.schema import example_extremes, example_histories
 
 
@@ -93,7 +95,7 @@ def test_figures_have_units_and_data(extremes, tmp_path):
 
     dated = pd.concat([example_extremes(range(50), d, seed=i, spread=0.2 + 0.05 * i)
                        for i, d in enumerate(["2024-01-15", "2024-07-15", "2025-01-15"])])
-    env = A.forecast_envelope(dated, "max_wheel_lateral_force_N")
+    env = T.forecast_envelope(dated, "max_wheel_lateral_force_N")
     fig = P.plot_forecast_envelope(env)
     assert fig.axes[0].get_ylabel() == "max. wheel-rail lateral force (kN)"  # displayed in kN
     (x, y), = [line.get_data() for line in fig.axes[0].get_lines() if line.get_label() == "weighted mean"]
@@ -102,8 +104,9 @@ def test_figures_have_units_and_data(extremes, tmp_path):
 
 
 def test_stats_report_cli_end_to_end(tmp_path):
-    """`ttbpipe stats-report` on two dated scenarios writes the tables, the page and the figures;
-    the reliability table read back equals assess_limits on the same data."""
+    """`ttbpipe stats-report` on two dated scenarios writes the tables, the pages and the figures
+    the workflow writes (ttbpipe.study.outputs.STUDY_FILES); the reliability table read back
+    equals assess_limits on the same data."""
     from ttbpipe.cli import main
     from ttbpipe.stats.limits import default_limits
 
@@ -124,12 +127,13 @@ def test_stats_report_cli_end_to_end(tmp_path):
     table = io.read_table(out / "reliability.parquet")
     expected = assess_limits(A.read_extremes(ext), default_limits())
     pd.testing.assert_series_equal(table["probability"], expected["probability"])
-    assert (out / "summary.rst").read_text().startswith("Reliability summary")
-    names = sorted(p.name for p in (out / "figures").iterdir())
-    assert "pdf_max_derailment_coefficient.png" in names
-    assert "envelope_max_deck_vertical_acc_m_s2.png" in names
-    assert "history_rail_vertical_acc_m_s2.png" in names
-    assert "convergence_2024-01-15.png" in names
+    assert (out / "summary.rst").read_text().startswith("**Limits exceeded")
+    assert "Reliability summary: study" in (out / "report" / "summary.html").read_text()
+    names = sorted(p.relative_to(out / "figures").as_posix() for p in (out / "figures").rglob("*"))
+    assert "pdf/irregularity_max_derailment_coefficient.png" in names
+    assert "envelope/max_deck_vertical_acc_m_s2.png" in names
+    assert "history/irregularity_rail_vertical_acc_m_s2.png" in names
+    assert "convergence/2024-01-15.png" in names
     assert set(io.read_table(out / "table1_std.parquet").columns) == {"index", "2024-01-15",
                                                                      "2024-07-15"}
 

@@ -25,7 +25,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from ttbpipe.fields import load_field_factors, sample_study  # noqa: E402
 from ttbpipe.io import read_provenance  # noqa: E402
-from ttbpipe.stats.aggregate import read_extremes  # noqa: E402
+from ttbpipe.stats.streaming import read_extremes  # noqa: E402
 from ttbpipe.study import samples as study_samples  # noqa: E402
 from ttbpipe.study.batch import batch_paths, simulate_design  # noqa: E402
 from ttbpipe.study.design import build_design  # noqa: E402
@@ -204,7 +204,7 @@ def test_fields_condition_factors_equal_the_fields_stage(tmp_path):
 def test_aggregation_tables_report_pages_and_missing_samples(reference, tmp_path):
     """Study outputs from the batch files; a forced exceedance (threshold below every sample:
     P = 1 exactly, binomial k = N) appears on the first page; a missing batch is an error."""
-    from ttbpipe.study.aggregate import aggregate_study
+    from ttbpipe.study.outputs import aggregate_study
     from ttbpipe.study.design import batches
 
     design, root, extremes, _ = reference

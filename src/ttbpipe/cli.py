@@ -27,8 +27,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                  "run one deterministic case from a YAML configuration"),
     "sample-fields": ("ttbpipe.fields.cli",
                       "draw random-field samples of track and bridge parameters"),
-    "stats-report": ("ttbpipe.stats.cli",
-                     "exceedance probabilities, statistics and figures from per-sample results"),
+    "stats-report": ("ttbpipe.study.cli_report",
+                     "the study's tables, figures and report pages from per-batch results"),
 }
 
 

@@ -114,7 +114,7 @@ def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: flo
                         np.ascontiguousarray(slopes))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def irregularity_at(track, channel, x):
     """Value and x-derivative of rail input ``channel`` at x (linear interpolation; 0 outside)."""
     s = (x - track.x0) / track.dx

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .aggregate import HistoryStatistics
+from .streaming import HistoryStatistics
 from .kde import ExtremeValueKDE, bounds_for
 from .schema import unit_of
 
@@ -207,7 +207,7 @@ def plot_forecast_envelope(envelope: pd.DataFrame, *, threshold: float | None = 
                            ax=None) -> Figure:
     """Mean and lower/upper quantile envelope of an index against forecast horizon (Fig. 17).
 
-    ``envelope`` from :func:`ttbpipe.stats.aggregate.forecast_envelope`; ISO-date scenarios are
+    ``envelope`` from :func:`ttbpipe.stats.tables.forecast_envelope`; ISO-date scenarios are
     placed on a date axis, others at equal spacing in the given order.
     """
     if ax is None:

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def hermite(xi, L):
     """(N1, N2, N3, N4) at local coordinate ``xi`` of an element of length ``L``."""
     xi2 = xi * xi

@@ -1,4 +1,4 @@
-"""Aggregation of per-batch result files with memory independent of the number of samples.
+"""Streaming reductions of per-batch result files, memory independent of the number of samples.
 
 * :func:`read_extremes` concatenates the per-sample extremes of all batches (one row per sample:
   small) after validating each file.
@@ -6,7 +6,9 @@
   deviation and percentiles against time or position from long-format time-history files,
   reading **one batch file at a time**. Its state is :class:`WeightedMoments` (five arrays of the
   grid length) and :class:`HistogramQuantiles` (``n_points x n_bins``); neither depends on the
-  number of samples.
+  number of samples. :func:`statistics_frame` turns its result into one long table.
+
+Tables over the reduced results (Table 1, forecast envelopes): :mod:`ttbpipe.stats.tables`.
 
 Percentile accuracy: each grid point gets ``n_bins`` equal bins between the smallest and largest
 value seen there (first pass); a percentile is read from the weighted cumulative histogram by
@@ -402,75 +404,3 @@ def aggregate_histories(paths: Iterable[str | os.PathLike[str]], *,
 def statistics_frame(results: dict[tuple[str, str], HistoryStatistics]) -> pd.DataFrame:
     """All :class:`HistoryStatistics` as one long table (for ``ttbpipe.io.write_table``)."""
     return pd.concat([r.to_frame() for r in results.values()], ignore_index=True)
-
-
-# --- tables over extremes -----------------------------------------------------------------------
-
-def weighted_mean_std(values: np.ndarray, weights: np.ndarray,
-                      kind: str = "reliability") -> tuple[float, float]:
-    """Weighted mean and std of one column (same definitions as :class:`WeightedMoments`)."""
-    m = WeightedMoments(1)
-    m.update(np.asarray(values, dtype=float)[:, None], weights)
-    return float(m.mean[0]), float(m.std(kind)[0])
-
-
-def weighted_quantile(values: np.ndarray, weights: np.ndarray, q: Sequence[float]) -> np.ndarray:
-    """Exact weighted inverted-CDF quantiles (numpy ``method='inverted_cdf'`` with weights)."""
-    return np.percentile(np.asarray(values, dtype=float), 100 * np.asarray(q, dtype=float),
-                         weights=np.asarray(weights, dtype=float), method="inverted_cdf")
-
-
-def standard_deviation_table(extremes: pd.DataFrame, columns: Sequence[str] | None = None,
-                             scenarios: Sequence[str] | None = None,
-                             kind: str = "reliability") -> pd.DataFrame:
-    """The paper's Table 1 from per-sample extremes: weighted std of each index per scenario.
-
-    Rows: response indices (with units in their names); columns: scenarios (randomness
-    conditions C1..C4 in the paper). See :func:`max_std_table` for the time-history variant.
-    """
-    from .schema import response_columns
-
-    columns = list(columns) if columns is not None else response_columns(extremes)
-    scenarios = list(scenarios) if scenarios is not None else sorted(extremes["scenario"].unique())
-    table = pd.DataFrame(index=pd.Index(columns, name="index"), columns=scenarios, dtype=float)
-    for scenario in scenarios:
-        block = extremes[extremes["scenario"] == scenario]
-        if block.empty:
-            raise ValueError(f"no samples for scenario {scenario!r}")
-        for col in columns:
-            if col in block.columns:
-                table.loc[col, scenario] = weighted_mean_std(block[col], block["weight"], kind)[1]
-    return table
-
-
-def max_std_table(results: dict[tuple[str, str], HistoryStatistics]) -> pd.DataFrame:
-    """Table 1 as the paper reads it: maximum over time/position of the std curve per scenario."""
-    rows = {}
-    for (scenario, quantity), r in results.items():
-        rows.setdefault(quantity, {})[scenario] = float(np.nanmax(r.std))
-    table = pd.DataFrame.from_dict(rows, orient="index")
-    table.index.name = "quantity"
-    return table[sorted(table.columns)]
-
-
-def forecast_envelope(extremes: pd.DataFrame, column: str, scenarios: Sequence[str] | None = None,
-                      lower: float = 0.05, upper: float = 0.95) -> pd.DataFrame:
-    """Per scenario (e.g. forecast horizon): weighted mean and lower/upper quantiles of an index.
-
-    Fig. 17 of the paper ("general, upper and lower limits"). Scenario order: as given, else
-    sorted (ISO dates sort chronologically).
-    """
-    scenarios = list(scenarios) if scenarios is not None else sorted(extremes["scenario"].unique())
-    rows = []
-    for scenario in scenarios:
-        block = extremes[extremes["scenario"] == scenario]
-        if block.empty:
-            raise ValueError(f"no samples for scenario {scenario!r}")
-        values, weights = block[column].to_numpy(dtype=float), block["weight"].to_numpy(dtype=float)
-        mean, std = weighted_mean_std(values, weights)
-        lo, hi = weighted_quantile(values, weights, [lower, upper])
-        rows.append({"scenario": scenario, "mean": mean, "std": std, "lower": lo, "upper": hi,
-                     "n_samples": len(block)})
-    env = pd.DataFrame(rows)
-    env.attrs.update(column=column, lower_q=lower, upper_q=upper)
-    return env

@@ -1,4 +1,5 @@
-"""Bounded-memory aggregation of batch files (ttbpipe.stats.aggregate).
+"""Bounded-memory aggregation of batch files (ttbpipe.stats.streaming) and the tables over its
+results (ttbpipe.stats.tables).
 
 Reference: numpy on the same data held in memory (np.average, np.std(ddof=1), weighted
 np.percentile(method='inverted_cdf')), and the closed-form weighted variance definitions.
@@ -11,7 +12,8 @@ import pandas as pd
 import pytest
 
 from ttbpipe import io
-from ttbpipe.stats import aggregate as A
+from ttbpipe.stats import streaming as A
+from ttbpipe.stats import tables as T
 from ttbpipe.stats.schema import ResultsSchemaError, example_extremes, example_histories
 
 QUANTITIES = ["rail_vertical_acc_m_s2", "girder_vertical_disp_m"]
@@ -145,14 +147,14 @@ def test_table1_and_forecast_envelope_match_numpy():
     envelope: mean and quantiles equal np.average / weighted np.percentile (exact)."""
     a = example_extremes(range(100), "C1", seed=1)
     b = example_extremes(range(100), "C2", seed=2, spread=0.5)
-    table = A.standard_deviation_table(pd.concat([a, b]), columns=["max_wheel_vertical_force_N",
+    table = T.standard_deviation_table(pd.concat([a, b]), columns=["max_wheel_vertical_force_N",
                                                                    "sperling_lateral"])
     assert list(table.columns) == ["C1", "C2"]
     assert table.loc["sperling_lateral", "C2"] == pytest.approx(b["sperling_lateral"].std(ddof=1), rel=1e-12)
     w = np.random.default_rng(0).uniform(0.1, 1, 100)
     dated = pd.concat([example_extremes(range(100), "2024-01-15", weights=w),
                        example_extremes(range(100), "2023-06-15", seed=5, weights=w)])
-    env = A.forecast_envelope(dated, "max_deck_vertical_acc_m_s2", lower=0.1, upper=0.9)
+    env = T.forecast_envelope(dated, "max_deck_vertical_acc_m_s2", lower=0.1, upper=0.9)
     assert list(env["scenario"]) == ["2023-06-15", "2024-01-15"]
     x = dated[dated.scenario == "2024-01-15"]["max_deck_vertical_acc_m_s2"].to_numpy()
     assert env["mean"].iloc[1] == pytest.approx(np.average(x, weights=w), rel=1e-12)
@@ -163,7 +165,7 @@ def test_max_std_table_from_histories(tmp_path):
     """Table 1 as the paper reads it (maximum of the std curve) equals max over points of numpy's
     std (1e-10 relative)."""
     paths, df = _write_batches(tmp_path, [20, 20])
-    table = A.max_std_table(A.aggregate_histories(paths))
+    table = T.max_std_table(A.aggregate_histories(paths))
     x = _matrix(df, QUANTITIES[1], 120)
     assert table.loc[QUANTITIES[1], "C1"] == pytest.approx(x.std(axis=0, ddof=1).max(), rel=1e-10)
 

@@ -1,0 +1,448 @@
+"""Every text page of the study's report: one summary, computed once, and the pages that state it.
+
+:func:`summarize` reduces the table of :func:`ttbpipe.stats.reliability.assess_limits` (and,
+for a study, its extremes and design) to a :class:`StudySummary`: the evaluated limits and
+grades, the limits exceeded, the pairs whose samples did not suffice and the sample size the
+criterion asks for, the one-sided upper bounds, the scenarios and their sample counts. Every page
+reads its counts and bounds from that one object, so that no two places can state them
+differently. Probabilities are written by one formatter (:func:`probability_text`).
+
+Pages (reStructuredText for the Snakemake report, HTML for its report items):
+
+* :func:`main_page_rst`: ``summary.rst``, the few lines the report's main page embeds;
+* :func:`compact_page_rst`: the first part of ``report/summary.html`` (limits exceeded, the
+  limit x scenario matrix of P(exceed), whether the samples sufficed);
+* :func:`first_page_rst`: the full first page (limits exceeded, grades, sample sufficiency, every
+  limit per scenario, what could not be evaluated); ``report/summary.html`` continues with it;
+* :func:`reliability_html`, :func:`table1_html`, :func:`table1_history_html`,
+  :func:`configuration_html`: the tables and the configuration as report pages;
+* :func:`study_pages`: all of them for one study, keyed like the files of
+  :data:`ttbpipe.study.outputs.STUDY_FILES` (which writes them).
+"""
+
+from __future__ import annotations
+
+import html
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from ..io import jsonable, write_text
+
+#: Report category that holds the full summary (the main page points there).
+SUMMARY_CATEGORY = "0. Summary"
+
+
+# --- the summary ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class StudySummary:
+    """What the summary pages state, computed once by :func:`summarize`.
+
+    Row tables keep the order of the assessment table. ``limits`` are the evaluated rows of
+    category 'limit', ``grades`` those of category 'grade' (quality grade boundaries, not
+    limits), ``skipped`` the rows 'not evaluated'. ``scenarios`` (index: scenario) has
+    ``n_samples`` (from the extremes when given, else from the assessment), ``kind`` (from the
+    design, else empty), ``weighted`` and ``n_effective`` (from the assessment).
+    """
+
+    study: str | None
+    assessment: pd.DataFrame
+    evaluated: pd.DataFrame    # every evaluated row, limits and grades
+    limits: pd.DataFrame
+    grades: pd.DataFrame
+    skipped: pd.DataFrame
+    scenarios: pd.DataFrame
+    confidence: str            # the confidence level as the pages write it, e.g. "95 %"
+    method: str                # interval method, "n/a" when nothing was evaluated
+    exceeded: pd.DataFrame     # limits with at least one exceeding sample
+    insufficient: pd.DataFrame         # limits whose number of samples did not suffice
+    insufficient_grades: pd.DataFrame  # the same for the grades
+    samples_needed: int | None  # largest effective sample size the criterion asks for
+    upper_bounds: pd.Series    # per scenario: largest one-sided upper bound of P over the limits
+
+    @property
+    def exceeded_by_probability(self) -> pd.DataFrame:
+        """The limits exceeded, most probable first."""
+        return self.exceeded.sort_values("probability", ascending=False)
+
+    @property
+    def n_limits(self) -> int:
+        """Number of distinct limits evaluated."""
+        return int(self.limits["limit"].nunique())
+
+    @property
+    def limit_scenarios(self) -> list[str]:
+        """Scenarios with at least one evaluated limit, sorted."""
+        return sorted(self.limits["scenario"].unique())
+
+    @property
+    def n_runs(self) -> int:
+        """Number of samples (coupled runs) over all scenarios."""
+        return int(self.scenarios["n_samples"].sum())
+
+
+def summarize(assessment: pd.DataFrame, *, study: str | None = None,
+              extremes: pd.DataFrame | None = None,
+              design: pd.DataFrame | None = None) -> StudySummary:
+    """The :class:`StudySummary` of an :func:`~ttbpipe.stats.reliability.assess_limits` table."""
+    if assessment.empty:
+        raise ValueError("empty assessment: no scenario or no limit")
+    not_evaluated = assessment["status"].str.startswith("not evaluated").astype(bool)
+    evaluated = assessment[~not_evaluated]
+    category = (evaluated["category"] if "category" in evaluated
+                else pd.Series("limit", index=evaluated.index))
+    for column, dtype in (("n_exceed", "int64"), ("probability", "float64"),
+                          ("upper_one_sided", "float64"), ("sufficient", "bool")):
+        if column not in evaluated:  # nothing could be evaluated
+            evaluated = evaluated.assign(**{column: pd.Series(dtype=dtype)})
+    limits = evaluated[category == "limit"]
+    grades = evaluated[category == "grade"]
+    level = float(evaluated["confidence_level"].iloc[0]) if len(evaluated) else 0.95
+    insufficient = limits[~limits["sufficient"].astype(bool)]
+    need = insufficient["status"].str.extract(r"about (\d+) effective samples")[0].dropna()
+    return StudySummary(
+        study=study, assessment=assessment, evaluated=evaluated, limits=limits, grades=grades,
+        skipped=assessment[not_evaluated],
+        scenarios=_scenarios(evaluated, extremes, design),
+        confidence=f"{100 * level:g} %",
+        method=str(evaluated["method"].iloc[0]) if len(evaluated) else "n/a",
+        exceeded=limits[limits["n_exceed"] > 0],
+        insufficient=insufficient,
+        insufficient_grades=grades[~grades["sufficient"].astype(bool)],
+        samples_needed=int(need.astype(int).max()) if len(need) else None,
+        upper_bounds=limits.groupby("scenario")["upper_one_sided"].max())
+
+
+def _scenarios(evaluated: pd.DataFrame, extremes: pd.DataFrame | None,
+               design: pd.DataFrame | None) -> pd.DataFrame:
+    first = evaluated.groupby("scenario", sort=True).first()
+    if extremes is not None:
+        table = extremes.groupby("scenario", sort=True).size().rename("n_samples").to_frame()
+    else:
+        table = first[["n_samples"]].astype({"n_samples": "int64"}) if "n_samples" in first \
+            else pd.DataFrame({"n_samples": pd.Series(dtype="int64")})
+    kinds = {} if design is None else dict(
+        design.drop_duplicates("scenario").astype({"scenario": str})[["scenario", "kind"]].values)
+    table["kind"] = [str(kinds.get(str(s), "")) for s in table.index]
+    # the first evaluated row of each scenario, as the full page has always stated it (with the
+    # linearised effective size this is the first limit's n_eff)
+    for column, default in (("weighted", False), ("n_effective", np.nan)):
+        values = first[column].to_dict() if column in first else {}
+        table[column] = [values.get(s, default) for s in table.index]
+    return table
+
+
+# --- formatting -----------------------------------------------------------------------------------
+
+def probability_text(p: float) -> str:
+    """A probability or bound as every page writes it: 3 significant digits, exponent below 1e-3."""
+    if p == 0:
+        return "0"
+    return f"{p:.3g}" if p >= 1e-3 else f"{p:.2e}"
+
+
+def _ci(row) -> str:
+    return f"[{probability_text(row['ci_low'])}, {probability_text(row['ci_high'])}]"
+
+
+def _heading(text: str, char: str) -> str:
+    return f"{text}\n{char * len(text)}\n"
+
+
+def _escape(text: str) -> str:
+    """Escape characters that reStructuredText would read as markup in table cells."""
+    return str(text).replace("\\", "\\\\").replace("*", "\\*").replace("`", "\\`").replace("|", "\\|")
+
+
+def _list_table(header: list[str], rows: Iterable[list[str]], widths: list[int] | None = None) -> str:
+    lines = [".. list-table::", "   :header-rows: 1"]
+    if widths:
+        lines.append("   :widths: " + " ".join(str(w) for w in widths))
+    lines.append("")
+    for row in [header, *rows]:
+        lines.append(f"   * - {row[0]}")
+        lines += [f"     - {cell}" for cell in row[1:]]
+    return "\n".join(lines) + "\n"
+
+
+def _sufficiency_text(summary: StudySummary, separator: str = ": ") -> str:
+    """'for all N limit-scenario pairs.' / 'for K of N limit-scenario pairs[<separator>the
+    criterion ... needs up to about M effective samples per scenario].'"""
+    n, short = len(summary.limits), len(summary.insufficient)
+    if not short:
+        return f"for all {n} limit-scenario pairs."
+    need = summary.samples_needed
+    return (f"for {short} of {n} limit-scenario pairs"
+            + ("" if need is None else
+               f"{separator}the criterion (limits.sufficiency) needs up to "
+               f"about {need} effective samples per scenario") + ".")
+
+
+# --- summary pages ------------------------------------------------------------------------------
+
+def intro_rst(summary: StudySummary) -> str:
+    """First paragraph of the summary page: what was simulated."""
+    parts = [f"``{scenario}`` ({row['kind']}, {int(row['n_samples'])} samples)"
+             for scenario, row in summary.scenarios.iterrows()]
+    return (f"Study ``{summary.study}``: {summary.n_runs} coupled train-track-bridge runs in "
+            f"{len(summary.scenarios)} scenarios: " + ", ".join(parts) + ". "
+            "P(max index > limit) per scenario with two-sided confidence intervals "
+            "(TIPM-weighted scenarios use an effective sample size); method: "
+            "docs/reliability.md, study design: docs/studies.md.")
+
+
+def main_page_rst(summary: StudySummary, *, details: str = SUMMARY_CATEGORY) -> str:
+    """A few lines for the report's main page (which must stay short to display whole):
+    the limits exceeded with P and interval, and whether the number of samples sufficed."""
+    level, out = summary.confidence, []
+    exceeded = summary.exceeded_by_probability
+    if exceeded.empty:
+        out.append(f"**Limits exceeded: none.** No sample of any scenario exceeded any of the "
+                   f"{summary.n_limits} safety and comfort limits (one-sided {level} "
+                   "upper bounds of P(exceed): " + ", ".join(
+                       f"{s} < {probability_text(b)}" for s, b in summary.upper_bounds.items())
+                   + ").")
+    else:
+        out.append(f"**Limits exceeded** (P(max index > limit), {level} CI):")
+        out.append("")
+        for _, r in exceeded.iterrows():
+            out.append(f"- **{_escape(r['description'])} > {_escape(r['threshold'])}**, scenario "
+                       f"``{r['scenario']}``: P = {probability_text(r['probability'])} {_ci(r)} "
+                       f"({int(r['n_exceed'])} of {int(r['n_samples'])})")
+    out.append("")
+    verdict = "Yes" if summary.insufficient.empty else "No"
+    out.append(f"**Did the samples suffice? {verdict}**, {_sufficiency_text(summary)}")
+    out += ["", f"Table per limit and scenario, grades, sources: category *{details}*."]
+    return "\n".join(out) + "\n"
+
+
+def compact_page_rst(summary: StudySummary, *, intro: str,
+                     details: str = SUMMARY_CATEGORY) -> str:
+    """Short first page: limits exceeded, a limit x scenario matrix of P(exceed) with its
+    interval, and whether the samples sufficed (grades, sources and the full verdicts are on
+    the full page, :func:`first_page_rst`)."""
+    level = summary.confidence
+    title = f"Reliability summary: {summary.study}"
+    out = [title, "=" * len(title), "", intro, ""]
+    out += ["Limits exceeded", "-" * 15, ""]
+    exceeded = summary.exceeded_by_probability
+    if exceeded.empty:
+        out.append(f"**No sample exceeded any limit** ({summary.n_limits} limits, "
+                   f"{len(summary.limit_scenarios)} scenarios).")
+    for _, r in exceeded.iterrows():
+        out.append(f"- **{_escape(r['description'])} > {_escape(r['threshold'])}**, scenario "
+                   f"``{r['scenario']}``: P = {probability_text(r['probability'])}, {level} CI "
+                   f"{_ci(r)} ({int(r['n_exceed'])} of {int(r['n_samples'])} samples)")
+    heading = f"P(exceed) per limit and scenario ({level} CI)"
+    out += ["", heading, "-" * len(heading), ""]
+    scenarios = summary.limit_scenarios
+    out += [".. list-table::", "   :header-rows: 1", "",
+            "   * - limit"] + [f"     - {s}" for s in scenarios]
+    for name, block in summary.limits.groupby("limit", sort=False):
+        first = block.iloc[0]
+        out.append(f"   * - {name} > {_escape(first['threshold'])}")
+        by = block.set_index("scenario")
+        for s in scenarios:
+            if s not in by.index:
+                out.append("     - n/a")
+                continue
+            r = by.loc[s]
+            cell = (f"0 (< {probability_text(r['upper_one_sided'])})" if r["n_exceed"] == 0
+                    else f"{probability_text(r['probability'])} {_ci(r)}")
+            mark = "" if r["sufficient"] else " \\*"
+            out.append(f"     - {cell}{mark}")
+    out += ["", "0 (< u): no exceeding sample, one-sided upper bound u. "
+            "\\* the number of samples did not suffice.", ""]
+    out += ["Did the number of samples suffice?", "-" * 34, ""]
+    verdict = "**Yes**," if summary.insufficient.empty else "**No**"
+    out.append(f"{verdict} {_sufficiency_text(summary, '; ')}")
+    if len(summary.skipped):
+        out += ["", f"Not evaluated: {', '.join(sorted(summary.skipped['limit'].unique()))} (see "
+                "the full summary)."]
+    out += ["", f"Grades, sources and verdicts per limit: *{details}*."]
+    return "\n".join(out) + "\n"
+
+
+def _exceedance_line(r, pct: str) -> str:
+    return (f"- scenario ``{r['scenario']}``: **{_escape(r['description'])}** > "
+            f"{_escape(r['threshold'])}: P = {probability_text(r['probability'])}, {pct} CI "
+            f"{_ci(r)} ({int(r['n_exceed'])} of {int(r['n_samples'])} samples"
+            + (f", n_eff = {r['n_effective']:.1f}" if r.get("weighted") else "")
+            + f"; {_escape(r['source'])}).")
+
+
+def _verdict_lines(rows: pd.DataFrame) -> list[str]:
+    return [f"- {_escape(r['description'])}, scenario ``{r['scenario']}``: "
+            f"{_escape(r['status'])}." for _, r in rows.iterrows()] + [""]
+
+
+def _details(summary: StudySummary) -> list[str]:
+    """The sections of the full first page after its title and introduction."""
+    pct = summary.confidence
+    out = [_heading("Limits exceeded", "-")]
+    if summary.exceeded.empty:
+        out.append(f"No sample exceeded any evaluated limit ({len(summary.limits)} limit-scenario "
+                   "pairs).\n")
+    else:
+        for _, r in summary.exceeded.sort_values(["scenario", "probability"],
+                                                 ascending=[True, False]).iterrows():
+            out.append(_exceedance_line(r, pct))
+        out.append("")
+    if not summary.grades.empty:
+        out.append(_heading("Ride-quality grades", "-"))
+        out.append("Probability of exceeding a grade boundary (not a limit):\n")
+        for _, r in summary.grades.iterrows():
+            out.append(_exceedance_line(r, pct))
+        out.append("")
+
+    out.append(_heading("Did the number of samples suffice?", "-"))
+    n = len(summary.limits)
+    if n == 0:
+        out.append("No limit could be evaluated.\n")
+    elif summary.insufficient.empty:
+        out.append(f"Yes, for all {n} evaluated limit-scenario pairs.\n")
+    else:
+        out.append(f"No, for {len(summary.insufficient)} of {n} limit-scenario pairs:\n")
+        out += _verdict_lines(summary.insufficient)
+    if not summary.grades.empty:
+        m, short = len(summary.grades), summary.insufficient_grades
+        if short.empty:
+            out.append(f"Ride-quality grades: yes, for all {m} evaluated grade-scenario pairs.\n")
+        else:
+            out.append(f"Ride-quality grades: no, for {len(short)} of {m} grade-scenario pairs:\n")
+            out += _verdict_lines(short)
+
+    out.append(_heading("All limits", "-"))
+    for scenario, block in summary.evaluated.groupby("scenario", sort=True):
+        sizes = summary.scenarios.loc[scenario]
+        size = f"{int(sizes['n_samples'])} samples"
+        if sizes["weighted"]:
+            size += f", effective {sizes['n_effective']:.1f} (weighted)"
+        out.append(f"Scenario ``{scenario}`` ({size}).\n")
+        rows = [[_escape(r["description"]), _escape(r["threshold"]), str(int(r["n_exceed"])),
+                 probability_text(r["probability"]), _ci(r), "yes" if r["sufficient"] else "no",
+                 _escape(r["source"])] for _, r in block.iterrows()]
+        out.append(_list_table(["Index", "Limit", "Exceeding samples", "P(exceed)", f"{pct} CI",
+                                "Samples sufficed", "Source"], rows, [22, 14, 9, 9, 14, 8, 24]))
+    if not summary.skipped.empty:
+        out.append(_heading("Not evaluated", "-"))
+        for _, r in summary.skipped.iterrows():
+            out.append(f"- {_escape(r['description'])}, scenario ``{r['scenario']}``: "
+                       f"{_escape(r['status'].removeprefix('not evaluated: '))}.")
+        out.append("")
+    return out
+
+
+def first_page_rst(assessment: pd.DataFrame | StudySummary, *, title: str = "Reliability summary",
+                   study: str | None = None, intro: str | None = None) -> str:
+    """reStructuredText summary of an :func:`~ttbpipe.stats.reliability.assess_limits` table
+    (or of its :class:`StudySummary`).
+
+    Sections: limits exceeded (probability and confidence interval per scenario); whether the
+    number of samples sufficed; the full table per scenario; limits that could not be evaluated.
+    """
+    summary = assessment if isinstance(assessment, StudySummary) else summarize(assessment,
+                                                                                study=study)
+    study = summary.study if study is None else study
+    out = [_heading(title + (f": {study}" if study else ""), "=")]
+    out.append(intro.strip() + "\n" if intro else
+               f"Probability that a sample's maximum response index exceeds its limit, "
+               f"P(max index > limit), per scenario, with two-sided {summary.confidence} "
+               f"confidence intervals (method: {summary.method}; weighted "
+               "samples use an effective sample size). Details: docs/reliability.md.\n")
+    out += _details(summary)
+    return "\n".join(out).rstrip() + "\n"
+
+
+def write_first_page(assessment: pd.DataFrame, path: str | os.PathLike[str], **kwargs) -> Path:
+    """Write :func:`first_page_rst` atomically to ``path``."""
+    return write_text(first_page_rst(assessment, **kwargs), path)
+
+
+def summary_html(summary: StudySummary) -> str:
+    """``report/summary.html``: the compact page (with the study's introduction), then the
+    sections of the full first page under 'Details'."""
+    compact = compact_page_rst(summary, intro=intro_rst(summary), details="Details below")
+    details = "\n".join(["", "", *_details(summary)]).rstrip() + "\n"
+    return rst_to_html(compact + "\nDetails\n=======\n\n" + details,
+                       f"Reliability summary: {summary.study}")
+
+
+# --- HTML pages -------------------------------------------------------------------------------------
+
+def html_page(title: str, body: str) -> str:
+    """A self-contained HTML page (the report's tables and configuration)."""
+    style = ("body{font-family:sans-serif;font-size:13px;margin:1em}"
+             "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:3px 6px;"
+             "text-align:right}th{background:#eee}pre{font-size:12px}")
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+            f"<style>{style}</style></head><body><h2>{html.escape(title)}</h2>{body}</body></html>\n")
+
+
+def table_html(df: pd.DataFrame, title: str, note: str = "") -> str:
+    """A table as a self-contained HTML page (for the Snakemake report)."""
+    body = (f"<p>{html.escape(note)}</p>" if note else "") + df.to_html(
+        index=False, float_format=lambda v: f"{v:.4g}", na_rep="", border=0)
+    return html_page(title, body)
+
+
+def rst_to_html(rst: str, title: str) -> str:
+    """reStructuredText -> standalone HTML page (docutils)."""
+    from docutils.core import publish_string
+
+    return publish_string(rst, writer="html",
+                          settings_overrides={"embed_stylesheet": True, "report_level": 3,
+                                              "title": title}).decode()
+
+
+def reliability_html(assessment: pd.DataFrame) -> str:
+    """``report/reliability.html``: the exceedance table per scenario and limit."""
+    shown = assessment[["scenario", "limit", "threshold", "n_samples", "n_exceed", "probability",
+                        "ci_low", "ci_high", "sufficient", "status", "source"]
+                       ] if "probability" in assessment else assessment
+    return table_html(
+        shown, "Exceedance probabilities per scenario and limit",
+        "P(max index > limit) with two-sided confidence intervals; 'sufficient': the sample-size "
+        "criterion of limits.sufficiency.")
+
+
+def table1_html(table1: pd.DataFrame) -> str:
+    """``report/table1_std.html``: Table 1 over the per-sample maxima."""
+    return table_html(
+        table1, "Table 1: standard deviation of each index per randomness condition",
+        "Weighted standard deviation of the per-sample maxima (SI units in the index names); "
+        "columns: scenarios.")
+
+
+def table1_history_html(table1_history: pd.DataFrame) -> str:
+    """``report/table1_history_std.html``: Table 1 over the time histories."""
+    return table_html(
+        table1_history,
+        "Table 1 (time histories): maximum over position of the standard deviation",
+        "As the paper reads Table 1: max of the std curve of each quantity (SI units).")
+
+
+def configuration_html(config: Mapping[str, Any]) -> str:
+    """``report/configuration.html``: the study configuration as an HTML page."""
+    import yaml
+
+    text = yaml.safe_dump(jsonable(config), sort_keys=False, default_flow_style=None, width=100)
+    return html_page("Resolved study configuration", f"<pre>{html.escape(text)}</pre>")
+
+
+def study_pages(summary: StudySummary, config: Mapping[str, Any], table1: pd.DataFrame,
+                table1_history: pd.DataFrame | None = None) -> dict[str, str]:
+    """Every text page of a study, keyed like :data:`ttbpipe.study.outputs.STUDY_FILES`
+    (``table1_history_html`` only with the time-history table)."""
+    pages = {"summary_rst": main_page_rst(summary), "summary": summary_html(summary),
+             "reliability_html": reliability_html(summary.assessment),
+             "table1_html": table1_html(table1)}
+    if table1_history is not None:
+        pages["table1_history_html"] = table1_history_html(table1_history)
+    pages["configuration"] = configuration_html(config)
+    return pages
