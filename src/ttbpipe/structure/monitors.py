@@ -86,3 +86,106 @@ def record_monitors(rec, disp, vel, acc):
             rec.peak[m] = abs(s)
         rec.current[m] = s
     return largest
+
+
+def _beam_rows(dof_a: int, dof_b: int, L: float, xi: float) -> dict[str, tuple]:
+    N = hermite_shape(xi, L)
+    return {"z": ([dof_a, dof_a + 1, dof_b, dof_b + 1], N),
+            "y": ([dof_a + 2, dof_a + 3, dof_b + 2, dof_b + 3], N),
+            "roll": ([dof_a + 4, dof_b + 4], np.array([1 - xi, xi]))}
+
+
+def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
+    """{direction: (dofs, coefs)} of one monitor spec (see docs/structure.md, "Monitors")."""
+    kind = spec.get("kind")
+    name = spec.get("name", "?")
+    lay = model.layout
+    if kind == "rail":
+        if model.packed.n_rails == 0:
+            raise ValueError(f"monitor {name}: the structure has no rails")
+        x = float(spec["x_m"])
+        rail = int(spec.get("rail", 0))
+        if rail not in (0, 1) or not lay.rail_x[0] <= x <= lay.rail_x[-1]:
+            raise ValueError(f"monitor {name}: rail {rail} at x={x} m is outside the rails "
+                             f"[{lay.rail_x[0]}, {lay.rail_x[-1]}] m or rail is not 0/1")
+        mesh = rail_mesh(model.packed, 0.0)
+        h = mesh.dx
+        e = min(int(x / h), lay.rail_x.size - 2)
+        a = int(mesh.dof0[rail]) + NODE_DOFS * e
+        return _beam_rows(a, a + NODE_DOFS, h, (x - lay.rail_x[e]) / h)
+    if kind == "slab":
+        x = float(spec["x_m"])
+        se = model.slab_elements
+        inside = np.flatnonzero((se[:, 0] <= x) & (x <= se[:, 1])) if se.size else []
+        if len(inside) == 0:
+            raise ValueError(f"monitor {name}: no slab at x={x} m")
+        j = int(inside[0])
+        a = int(model.slab_element_node0[j])
+        L = se[j, 1] - se[j, 0]
+        return _beam_rows(a, a + 5, L, (x - se[j, 0]) / L)
+    if kind == "girder":
+        s = int(spec.get("span", 0))
+        if not 0 <= s < len(model.spans):
+            raise ValueError(f"monitor {name}: span {s} outside 0..{len(model.spans) - 1}")
+        red = model.spans[s]
+        x = float(spec["x_m"]) if "x_m" in spec else red.start_m + float(
+            spec.get("position", 0.5)) * red.length_m
+        if not red.start_m <= x <= red.start_m + red.length_m:
+            raise ValueError(f"monitor {name}: x={x} m is not on span {s}")
+        rz, ry, rr = red.rows_at(x)
+        idx = np.arange(model.dof_info["span_dof0"][s], model.dof_info["span_dof0"][s] + red.n)
+        return {"z": (idx, rz), "y": (idx, ry), "roll": (idx, rr)}
+    if kind == "pier":
+        p = int(spec.get("pier", 0))
+        if not 0 <= p < model.dof_info["n_piers"]:
+            raise ValueError(f"monitor {name}: pier {p} outside 0..{model.dof_info['n_piers'] - 1}")
+        d = model.dof_info["pier"] + 3 * p
+        return {"y": ([d], np.ones(1)), "z": ([d + 1], np.ones(1)), "roll": ([d + 2], np.ones(1))}
+    raise ValueError(f"monitor {name}: kind {kind!r}; expected rail | slab | girder | pier")
+
+
+def compile_monitors(model, specs: Sequence[Mapping[str, Any]]) -> MonitorSet:
+    """Compile monitor specs into a :class:`MonitorSet`."""
+    names, ptr, dof, coef, qty, scale = [], [0], [], [], [], []
+    seen = set()
+    for spec in specs:
+        name = spec.get("name")
+        if not name or name in seen:
+            raise ValueError(f"monitor {spec}: every monitor needs a unique 'name'")
+        seen.add(name)
+        rows = point_rows(model, spec)
+        for direction in spec.get("directions", ["z"]):
+            if direction not in rows:
+                raise ValueError(f"monitor {name}: direction {direction!r}; expected z | y | roll")
+            for q in spec.get("quantities", ["displacement", "acceleration"]):
+                if q not in QUANTITIES:
+                    raise ValueError(f"monitor {name}: quantity {q!r}; expected one of "
+                                     f"{list(QUANTITIES)}")
+                code = QUANTITIES[q]
+                suffix, sc = _SUFFIX[(direction, code)]
+                d, c = rows[direction]
+                names.append(f"{name}_{direction}_{suffix}")
+                dof.extend(np.asarray(d, dtype=np.int64)); coef.extend(np.asarray(c, float))
+                ptr.append(len(dof)); qty.append(code); scale.append(sc)
+    return MonitorSet(names, np.array(ptr, np.int64), np.array(dof, np.int64),
+                      np.array(coef, float), np.array(qty, np.int64), np.array(scale, float))
+
+
+def default_monitors(model) -> list[dict]:
+    """Rail, slab and girder at every span's midspan, and every pier."""
+    out = []
+    for s, red in enumerate(model.spans):
+        x = red.start_m + 0.5 * red.length_m
+        if model.packed.n_rails:
+            out.append({"name": f"rail_left_span{s + 1}_mid", "kind": "rail", "rail": 0,
+                        "x_m": x, "directions": ["z", "y"]})
+        if model.slab_elements.size and np.any((model.slab_elements[:, 0] <= x)
+                                               & (x <= model.slab_elements[:, 1])):
+            out.append({"name": f"slab_span{s + 1}_mid", "kind": "slab", "x_m": x,
+                        "directions": ["z", "y"]})
+        out.append({"name": f"girder_span{s + 1}_mid", "kind": "girder", "span": s,
+                    "position": 0.5, "directions": ["z", "y"]})
+    for p in range(model.dof_info["n_piers"]):
+        out.append({"name": f"pier{p + 1}", "kind": "pier", "pier": p,
+                    "directions": ["z", "y"]})
+    return out
