@@ -26,8 +26,8 @@ the run is represented by its largest value (:func:`~.processing.segment_maxima`
 the resampling: a peak is never lost between grid points) [M]; the statistic is the 99.85th
 percentile of the pieces. Car-body accelerations: Butterworth band-pass 0.4-40 Hz (order 4, zero
 phase [M: order]), largest |a| of each 2 m piece, mean + 2.2 sigma of those peaks. Sperling:
-:func:`ttbpipe.vehicle.comfort.sperling_index` (5 s windows, the largest window value, over the
-floor points of each car).
+:func:`ttbpipe.vehicle.comfort.sperling_index` (5 s windows, the largest window value [M: the
+standard's statistic over the windows], over the floor points of each car).
 """
 
 from __future__ import annotations

@@ -18,9 +18,9 @@ span's f_j is the mean of the cluster's frequencies weighted by their energy in 
 The ballasted approaches have hundreds of sleeper-ballast modes between 40 and 60 Hz, where the
 third bending mode of a 32 m span lies; the global eigenproblem is therefore solved with the
 sleeper-ballast coordinates held fixed (they only touch the bridge through the rails; measured
-on the reference case: f0 changes by less than 0.1 % with or without them). f3 is then sought
-near the bare girder's third frequency scaled by the coupled/bare ratio of the second, and the
-search window grows until the cluster lies inside it.
+on the reference case: the first five frequencies change by 1e-5 with or without them). f3 is
+then sought near the bare girder's third frequency scaled by the coupled/bare ratio of the
+second, and the search window grows until the cluster lies inside it.
 """
 
 from __future__ import annotations
