@@ -42,7 +42,7 @@ def assessed(tmp_path_factory):
     """{profile: (assessment table, its provenance)} and the run's summary, computed once for all
     workers (the first to take the lock runs the case, the others wait and reuse it)."""
     base = tmp_path_factory.getbasetemp()
-    # under pytest-xdist each worker's base is a child of the session's directory
+    # under pytest-xdist each worker's base is a child of the test run's directory
     shared = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "assessment_reference"
     shared.mkdir(exist_ok=True)
     with open(shared / "lock", "w") as lock:
