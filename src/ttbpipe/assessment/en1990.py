@@ -7,7 +7,9 @@ recommended values, [M] not re-read):
   (direct fastening) [V], for frequencies up to the greater of 30 Hz, 1.5 f0 and f3 [M: the band
   rule], f0 and f3 the first and third vertical frequencies of the member (the span), from
   ttbpipe's modal analysis of the run's structure (:mod:`.modal`). Processing: the span's
-  midspan girder acceleration (monitor ``girder_spanS_mid_z_acc_m_s2``) low-passed at
+  midspan deck acceleration on the deck surface under each rail (monitors
+  ``deck_left|right_spanS_mid_z_acc_m_s2``; the girder's shear centre
+  ``girder_spanS_mid_z_acc_m_s2`` for runs without them) low-passed at
   max(30 Hz, 1.5 f0, f3) (Butterworth order 4, zero phase, as the run's own deck filter,
   :func:`ttbpipe.simulation.outputs.lowpass_peak`), largest |a|. The limits are
   :data:`ttbpipe.stats.limits.DECK_VERTICAL_ACC_M_S2` (their one home); the track type follows the
@@ -40,6 +42,7 @@ import math
 import numpy as np
 
 from ..stats.limits import DECK_VERTICAL_ACC_M_S2
+from ..structure.monitors import deck_columns
 from .base import Profile, Row, governing
 from .modal import span_frequencies
 from .monitors import TWIST_BASE_M, TWIST_COLUMN
@@ -138,11 +141,12 @@ def _twist(run: RunData) -> tuple[list[str], np.ndarray]:
 
 
 def evaluate(run: RunData, options) -> list[Row]:
-    acc = run.girder("acc_m_s2")
+    acc = run.deck_acceleration()
     disp = run.girder("disp_mm")
     if not acc:
-        raise ValueError("the run has no girder midspan acceleration monitors "
-                         "(girder_spanS_mid_z_acc_m_s2; the structure's default monitors)")
+        raise ValueError("the run has no deck midspan acceleration monitors "
+                         "(deck_left_spanS_mid_z_acc_m_s2 or girder_spanS_mid_z_acc_m_s2; the "
+                         "structure's default monitors)")
     spans = sorted(acc)
     info = _spans(run, options, len(spans))
     order = int(options["filter_order"])
@@ -151,20 +155,22 @@ def evaluate(run: RunData, options) -> list[Row]:
     peaks, filters = [], []
     for (length, f0, f3), s in zip(info, spans):
         filt = deck_filter(f0, f3, order)
-        keep = filt.interior(acc[s].size, run.dt_s)      # without the filter's start-up
-        peaks.append(float(np.max(np.abs(filt.apply(acc[s], run.dt_s)[keep]))))
+        keep = filt.interior(acc[s][0].size, run.dt_s)   # without the filter's start-up
+        peaks.append(max(float(np.max(np.abs(filt.apply(a, run.dt_s)[keep]))) for a in acc[s]))
         filters.append(filt)
     kind = _track_type(run, options)
     labels = [f"span{s}" for s in spans]
     i, v, lim = governing(np.array(peaks), DECK_VERTICAL_ACC_M_S2[kind], labels)
     length, f0, f3 = info[i]
+    deck_monitors = {c[:-len("_z_acc_m_s2")]
+                     for cols in deck_columns(run.table.columns, "z").values() for c in cols}
     unfiltered = [val for k, val in (run.summary.get("monitor_peaks") or {}).items()
-                  if k.startswith("girder_span") and k.endswith("_z_acc_m_s2")]
+                  if k.endswith("_z_acc_m_s2") and k[:-len("_z_acc_m_s2")] in deck_monitors]
     rows.append(Row(
         "A2.4.4.2.1 (deck vertical acceleration)", "deck_vertical_acc_m_s2", "m/s^2", "span",
         labels[i], v, lim, f"{lim:g} m/s^2, {kind} track (EN 1990 A2 A2.4.4.2.1) [V]",
         raw_index="max_deck_vertical_acc_m_s2", raw_value=run.raw("max_deck_vertical_acc_m_s2"),
-        statistic="largest |a| at midspan",
+        statistic="largest |a| at midspan under the rails",
         notes=(f"band max(30 Hz, 1.5 f0, f3) with f0 = {f0:.3f} Hz, f3 = {f3:.3f} Hz of "
                f"{labels[i]} (cut-offs of the spans {', '.join(f'{f.high_hz:.1f}' for f in filters)} Hz); "
                f"raw_value is the run's deck index, low-passed at "

@@ -157,10 +157,20 @@ class RunData:
         return labels, self._columns([self.carbody_columns[k] for k in keys])
 
     def girder(self, quantity: str) -> dict[int, np.ndarray]:
-        """{span (1-based): midspan vertical history} for 'acc_m_s2' or 'disp_mm'."""
+        """{span (1-based): midspan vertical history at the girder's shear centre} for 'acc_m_s2'
+        or 'disp_mm'."""
         out = {}
         for c in self.table.columns:
             m = _GIRDER.match(c)
             if m and m.group(2) == quantity:
                 out[int(m.group(1))] = self.table[c].to_numpy(float)
         return dict(sorted(out.items()))
+
+    def deck_acceleration(self) -> dict[int, list[np.ndarray]]:
+        """{span (1-based): midspan vertical deck accelerations}: under each rail at the deck
+        surface where the run recorded it, else at the shear centre
+        (:func:`ttbpipe.structure.monitors.deck_columns`)."""
+        from ..structure.monitors import deck_columns
+
+        return {s: [self.table[c].to_numpy(float) for c in cols]
+                for s, cols in deck_columns(self.table.columns, "z").items()}

@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..response_indices import PER_CAR, PER_SPAN
+from ..structure.monitors import deck_columns
 from ..vehicle.comfort import sperling_index
 from .recorder import decimated, derailment_coefficients
 from .setup import CoupledSetup, diagnosis_limits, wheel_labels
@@ -148,8 +149,7 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
         peaks = {name: float(raw.monitors.peak[i]) for i, name in enumerate(setup.monitors.names)}
         dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
         for direction, axis in (("vertical", "z"), ("lateral", "y")):
-            deck = [c for c in table.columns
-                    if c.startswith("girder_span") and c.endswith(f"_mid_{axis}_acc_m_s2")]
+            deck = [c for cols in deck_columns(table.columns, axis).values() for c in cols]
             rail = [k for k in peaks if k.startswith("rail_") and k.endswith(f"_{axis}_acc_m_s2")]
             if deck:
                 out[f"max_deck_{direction}_acc_m_s2"] = max(
@@ -164,12 +164,10 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
         out[PER_CAR[0 if direction == "vertical" else 1].format(car=car[3:])] = float(value)
     if setup.monitors is not None:
         dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
-        for s in range(1, setup.n_spans + 1):
-            for axis, name in zip(("z", "y"), PER_SPAN):
-                col = f"girder_span{s}_mid_{axis}_acc_m_s2"
-                if col in table.columns:
-                    out[name.format(span=s)] = lowpass_peak(table[col].to_numpy(float), dt_out,
-                                                            deck_filter_hz)
+        for axis, name in zip(("z", "y"), PER_SPAN):
+            for s, cols in deck_columns(table.columns, axis).items():
+                out[name.format(span=s)] = max(lowpass_peak(table[c].to_numpy(float), dt_out,
+                                                            deck_filter_hz) for c in cols)
     return out
 
 
