@@ -8,8 +8,8 @@ data", Appendix E "Measurement and data processing method of stability index W" 
 Indices and limits (docs/reference/standards.md, [V] = read in a public post-processing script
 for a commercial code, [M] = not confirmed): derailment coefficient Q/P <= 0.8 (tangent and
 R > 400 m) [V]; wheel unloading ratio (P0 - P)/P0 <= 0.65 up to 160 km/h [V], 0.8 above [M];
-lateral wheelset force H <= 15 + P0/3 kN with P0 the static **axle** load in kN [V] (note: the
-study's :class:`ttbpipe.stats.limits.StaticLoadLimit` applies P0/3 to the static wheel load);
+lateral wheelset force H <= 15 + P0/3 kN with P0 the static **axle** load in kN [V] (as the
+study's :class:`ttbpipe.stats.limits.StaticLoadLimit` does for the raw index);
 car-body acceleration 2.5 m/s^2 as mean + 2.2 sigma of the 2 m peaks of the 0.4-40 Hz band [V];
 Sperling index W from 5 s windows, grade "excellent" below 2.5, "good" 2.75, "pass" 3.0 [M], the
 5 s window confirmed by Zhang, Zhou et al., J. Tongji Univ. 2023,

@@ -114,7 +114,7 @@ def plot_exceedance_convergence(curves: Sequence[pd.DataFrame], *, log_x: bool =
         if log_x and n[-1] > 20:
             ax.set_xscale("log")
         ax.set_xlabel("number of samples (sample-index order)")
-        ax.set_ylabel("P(max index > limit) (–)")
+        ax.set_ylabel("P(index > limit) (–)")
         ax.set_ylim(bottom=0)
         threshold = str(a.get("threshold", "")).replace("^2", "²")
         ax.set_title(f"{a.get('description', a.get('limit', ''))} > {threshold}\n"
