@@ -46,18 +46,23 @@ assessment:
 """
 
 
-def _incomplete(workdir: Path) -> set[str]:
-    """Outputs Snakemake marked incomplete (jobs it had not seen finish when it was stopped):
-    .snakemake/incomplete/<urlsafe base64 of the path>, long names split into '@' chunks."""
+def _recorded(workdir: Path, kind: str) -> set[str]:
+    """Outputs Snakemake recorded under .snakemake/<kind>: ``incomplete`` (jobs it had not seen
+    finish when it was stopped) or ``metadata`` (jobs it registered as finished). Each is a
+    file named by the urlsafe base64 of the output's path, long names split into '@' chunks."""
     import base64
 
-    root = workdir / ".snakemake" / "incomplete"
+    root = workdir / ".snakemake" / kind
     out = set()
     for path in root.rglob("*") if root.is_dir() else []:
         if path.is_file() and path.name != "migration_underway":
             parts = path.relative_to(root).parts
             out.add(base64.urlsafe_b64decode("".join(p.lstrip("@") for p in parts)).decode())
     return out
+
+
+def _incomplete(workdir: Path) -> set[str]:
+    return _recorded(workdir, "incomplete")
 
 
 def _start(cmd: list[str], cwd: Path, env: dict) -> tuple[subprocess.Popen, list[str]]:
@@ -85,12 +90,14 @@ def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
     proc, output = _start(_cmd("results/study/extremes.parquet"), tmp_path, env)
     deadline = time.monotonic() + 180
     # interrupt once Snakemake has registered a finished batch (a batch whose files exist but
-    # whose job Snakemake has not seen end is, rightly, marked incomplete and redone)
-    while time.monotonic() < deadline and not re.search(
-            r"Finished jobid: \d+ \(Rule: simulate_batch\)", "".join(output)):
+    # whose job Snakemake has not seen end is, rightly, marked incomplete and redone). Snakemake
+    # records a finished job's outputs in .snakemake/metadata at once; its log lines reach the
+    # pipe later on a loaded machine, too late to interrupt a run of a few seconds.
+    while time.monotonic() < deadline and not any(
+            "/batches/" in name for name in _recorded(tmp_path, "metadata")):
         if proc.poll() is not None:
             pytest.fail("snakemake ended before the first batch:\n" + "".join(output)[-3000:])
-        time.sleep(0.1)
+        time.sleep(0.02)
     os.killpg(proc.pid, signal.SIGINT)
     proc.wait(timeout=60)
     batches = next(root.glob("*/C3"))
@@ -123,7 +130,7 @@ def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
 
     config = yaml.safe_load((tmp_path / "config" / "config.yaml").read_text())
     tiny = yaml.safe_load(TINY_STUDY)
-    for key in ("study", "structure", "simulation"):
+    for key in ("study", "structure", "simulation", "assessment"):
         config[key] = tiny[key]
     config["fields"]["variance_fraction"] = 0.9
     design = build_design(config["study"], latest_campaign="2024-01-15", horizons_months=[])
