@@ -81,33 +81,52 @@ def _cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "snakemake", *args, "--cores", "2", "--configfile", "tiny.yaml"]
 
 
-@pytest.mark.slow
-def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
-    _copy_repository(tmp_path)
-    (tmp_path / "tiny.yaml").write_text(TINY_STUDY)
-    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
-    root = tmp_path / "results" / "study" / "batches"   # <digest>/<scenario>/...
-    proc, output = _start(_cmd("results/study/extremes.parquet"), tmp_path, env)
+def _interrupted_run(workdir: Path, env: dict) -> tuple[Path, dict[str, int]]:
+    """Run the tiny study in ``workdir`` and interrupt it (SIGINT to its process group, as
+    Ctrl-C) once Snakemake has registered a finished batch; (batch folder, {file: mtime} of the
+    batches it had registered) or None when the run ended before the interruption took."""
+    workdir.mkdir(parents=True)
+    _copy_repository(workdir)
+    (workdir / "tiny.yaml").write_text(TINY_STUDY)
+    root = workdir / "results" / "study" / "batches"   # <digest>/<scenario>/...
+    proc, output = _start(_cmd("results/study/extremes.parquet"), workdir, env)
     deadline = time.monotonic() + 180
     # interrupt once Snakemake has registered a finished batch (a batch whose files exist but
     # whose job Snakemake has not seen end is, rightly, marked incomplete and redone). Snakemake
     # records a finished job's outputs in .snakemake/metadata at once; its log lines reach the
-    # pipe later on a loaded machine, too late to interrupt a run of a few seconds.
+    # pipe later on a loaded machine.
     while time.monotonic() < deadline and not any(
-            "/batches/" in name for name in _recorded(tmp_path, "metadata")):
+            "/batches/" in name for name in _recorded(workdir, "metadata")):
         if proc.poll() is not None:
             pytest.fail("snakemake ended before the first batch:\n" + "".join(output)[-3000:])
         time.sleep(0.02)
     os.killpg(proc.pid, signal.SIGINT)
     proc.wait(timeout=60)
+    if (workdir / "results" / "study" / "extremes.parquet").exists():
+        return None
     batches = next(root.glob("*/C3"))
     # a batch whose job Snakemake had not seen finish is marked incomplete and redone, rightly
-    pending = _incomplete(tmp_path)
+    pending = _incomplete(workdir)
     finished = {p.name: p.stat().st_mtime_ns for p in batches.glob("*.parquet")
-                if str(p.relative_to(tmp_path)) not in pending}
+                if str(p.relative_to(workdir)) not in pending}
+    return batches, finished
+
+
+@pytest.mark.slow
+def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
+    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+    # Snakemake acts on SIGINT in its scheduling loop; on a loaded machine the signal can land
+    # elsewhere and the run goes on to the end. That is a miss of the set-up, not a result: try
+    # again in a fresh copy (three times at most, then the test fails)
+    for attempt in range(3):
+        got = _interrupted_run(tmp_path / f"attempt{attempt}", env)
+        if got is not None:
+            break
+    else:
+        pytest.fail("three runs finished before they could be interrupted; the test shows nothing")
+    tmp_path = tmp_path / f"attempt{attempt}"
+    batches, finished = got
     assert finished, "no batch finished before the interruption"
-    assert not (tmp_path / "results" / "study" / "extremes.parquet").exists(), \
-        "the run finished before it could be interrupted; the test shows nothing"
     assert not [p for p in batches.iterdir() if p.name.startswith(".")], "temporary files left"
 
     rerun = subprocess.run(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,

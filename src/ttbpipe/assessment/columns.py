@@ -54,6 +54,10 @@ DISPLAY_NAMES = {
     "lateral_wheelset_force_H_N": "lateral wheelset force H",
     "b_v_m_s2": "in-coach vertical acceleration b_v", "N_MV": "mean comfort N_MV",
     "span_to_deflection_ratio": "span / deflection L/δ",
+    "deck_vertical_acc_m_s2": "deck vertical acceleration",
+    "carbody_vertical_acc_m_s2": "car-body vertical acceleration",
+    "carbody_lateral_acc_m_s2": "car-body lateral acceleration",
+    "sperling_vertical": "Sperling index, vertical", "sperling_lateral": "Sperling index, lateral",
 }
 
 

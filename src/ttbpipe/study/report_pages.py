@@ -250,7 +250,7 @@ def margins_rst(summary: StudySummary) -> str:
                      limit_text(r), f"{r['median_utilisation']:.3f}", f"{r['p95_utilisation']:.3f}",
                      f"**{r['max_utilisation']:.3f}** (``{r['scenario']}`` #{int(r['max_sample_index'])})",
                      _p_cell(r)])
-    out.append(_list_table(["Section", "Index (standard, clause)", "Limit", "Median", "95 %",
+    out.append(_list_table(["Section", "Index (standard)", "Limit", "Median", "95 %",
                             "Max (scenario #sample)", f"P(util. > 1) [{level}]"], rows,
                            [12, 30, 12, 8, 8, 16, 16]))
     return "\n".join(out) + "\n"
@@ -303,12 +303,22 @@ def main_page_rst(summary: StudySummary, *, details: str = SUMMARY_CATEGORY) -> 
                        f"``{r['scenario']}``: P = {probability_text(r['probability'])} {_ci(r)} "
                        f"({int(r['n_exceed'])} of {int(r['n_samples'])})")
     if not summary.margins.empty:
-        w = summary.margins.loc[summary.margins["max_utilisation"].idxmax()]
+        m = summary.margins
+        w = m.loc[m["max_utilisation"].idxmax()]
         out += ["", f"**Largest utilisation {w['max_utilisation']:.3g}** (index / limit): "
                 f"{_escape(display_name(w['index']))} ({_escape(w['standard'])}), limit "
                 f"{limit_text(w)}, scenario "
-                f"``{w['scenario']}`` sample {int(w['max_sample_index'])}; every index: "
-                f"*{details}*, *Margins to the limits*."]
+                f"``{w['scenario']}`` sample {int(w['max_sample_index'])}. Closest to its limit "
+                f"in each section (every index: *{details}*, *Margins to the limits*):", ""]
+        rows = []
+        for section, block in m.groupby("section", sort=False):
+            r = block.loc[block["max_utilisation"].idxmax()]
+            rows.append([_escape(section), f"{_escape(display_name(r['index']))} "
+                         f"({_escape(r['standard'])})", limit_text(r),
+                         f"{r['p95_utilisation']:.3f}", f"**{r['max_utilisation']:.3f}**",
+                         _p_cell(r)])
+        out.append(_list_table(["Section", "Index", "Limit", "Utilisation, 95 %",
+                                "Utilisation, max", f"P(util. > 1) [{level}]"], rows))
     out.append("")
     verdict = "Yes" if summary.insufficient.empty else "No"
     out.append(f"**Did the samples suffice? {verdict}**, {_sufficiency_text(summary)}")

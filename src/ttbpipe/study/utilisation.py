@@ -127,7 +127,7 @@ def plot_section(extremes: pd.DataFrame, indices: Sequence[AssessedIndex], secti
         raise ValueError(f"no assessed index with a limit in section {section!r}")
     scenarios = list(scenarios) if scenarios is not None else sorted(extremes["scenario"].unique())
     n_idx, n_sc = len(mine), len(scenarios)
-    fig = Figure(figsize=(7.5, 0.9 + 0.32 * n_idx * max(n_sc, 2) ** 0.6 + 0.6), layout="constrained")
+    fig = Figure(figsize=(8.5, 0.9 + 0.32 * n_idx * max(n_sc, 2) ** 0.6 + 0.6), layout="constrained")
     ax = fig.subplots()
     height = 0.8 / n_sc
     largest = 0.0
@@ -147,7 +147,8 @@ def plot_section(extremes: pd.DataFrame, indices: Sequence[AssessedIndex], secti
                        label=f"{scenario} (n = {u.size})" if i == 0 else None)
     ax.axvline(AT_LIMIT, color="k", lw=1.5, ls="--", label="limit (utilisation 1)")
     ax.set_yticks(range(n_idx))
-    ax.set_yticklabels([f"{_index_text(a)}\n{a.standard}" for a in reversed(mine)], fontsize=7)
+    ax.set_yticklabels([f"{_index_text(a)}{' (grade)' if a.category == 'grade' else ''}"
+                        f"\n{a.standard}" for a in reversed(mine)], fontsize=7)
     ax.set_ylim(-0.6, n_idx - 0.4)
     ax.set_xlim(0.0, max(1.1, 1.05 * largest))
     ax.set_xlabel("utilisation = processed index / limit (–); box: 5 %-95 % of the samples, "
@@ -155,7 +156,7 @@ def plot_section(extremes: pd.DataFrame, indices: Sequence[AssessedIndex], secti
     ax.set_title(f"{section}: largest utilisation {largest:.3g} "
                  f"({'above' if largest > AT_LIMIT else 'below'} the limit)", fontsize=9)
     ax.grid(True, axis="x", alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right", ncol=1 if n_sc < 5 else 2)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     return fig
 
 
