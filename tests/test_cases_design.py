@@ -55,6 +55,19 @@ def test_sweep_speeds_and_batches():
         sweep_speeds({"speeds_kmh": [800, 200, 10]})
 
 
+def test_sweep_reaches_1p2_times_the_line_speed():
+    """EN 1991-2 6.4.6.2(1): speeds up to 1.2 x the maximum line speed."""
+    speeds = sweep_speeds({"speeds_kmh": [200, None, 10], "line_speed_kmh": 350})
+    assert speeds[-1] == 420 and speeds[0] == 200 and len(speeds) == 23
+    speeds = sweep_speeds({"speeds_kmh": [200, None, 15], "line_speed_kmh": 350})
+    assert speeds[-1] == 425                       # the first step at or above 420
+    assert sweep_speeds({"speeds_kmh": [200, 800, 10], "line_speed_kmh": 350})[-1] == 800
+    with pytest.raises(ValueError, match="below 1.2 x the line speed 350 km/h = 420"):
+        sweep_speeds({"speeds_kmh": [200, 400, 10], "line_speed_kmh": 350})
+    with pytest.raises(ValueError, match="no line_speed_kmh"):
+        sweep_speeds({"speeds_kmh": [200, None, 10]})
+
+
 def test_sweep_resonance_finds_the_peak_near_the_prediction():
     """A synthetic response with a peak at 500 km/h: found at 500 within a +-40 km/h window."""
     v = np.arange(200.0, 801.0, 10.0)

@@ -160,14 +160,14 @@ def test_sufficiency_verdict():
 
 
 def test_limits_thresholds_and_sources():
-    """Default limits: physics.md section 4 values in SI; lateral force 15 kN + P0/3; unloading
+    """Default limits: physics.md section 4 values in SI; lateral force 15 kN + P0/3 with P0 the static axle load; unloading
     0.65 at <= 160 km/h, 0.8 above; every limit names a source."""
     limits = {lim.name: lim for lim in L.default_limits("ballasted")}
     df = pd.DataFrame({"train_speed_m_s": [100 / 3.6, 160 / 3.6, 300 / 3.6],
-                       "static_wheel_load_N": [60e3, 70e3, 75e3]})
+                       "static_axle_load_N": [120e3, 140e3, 150e3]})
     np.testing.assert_allclose(limits["wheel_unloading_ratio"].thresholds(df), [0.65, 0.65, 0.8])
     np.testing.assert_allclose(limits["lateral_wheelset_force"].thresholds(df),
-                               [35e3, 15e3 + 70e3 / 3, 40e3])
+                               [55e3, 15e3 + 140e3 / 3, 65e3])
     assert limits["deck_vertical_acc"].threshold == 3.5
     assert L.default_limits("ballastless")[-2].threshold == 5.0
     assert limits["carbody_vertical_acc"].threshold == pytest.approx(0.13 * 9.80665)
@@ -176,7 +176,7 @@ def test_limits_thresholds_and_sources():
     no_inputs = pd.DataFrame({"x": [1.0]})
     with pytest.raises(L.LimitNotEvaluable, match="train_speed"):
         limits["wheel_unloading_ratio"].thresholds(no_inputs)
-    ctx = L.LimitContext(train_speed_kmh=120.0, static_wheel_load_N=72e3)
+    ctx = L.LimitContext(train_speed_kmh=120.0, static_axle_load_N=144e3)
     assert limits["wheel_unloading_ratio"].thresholds(no_inputs, ctx)[0] == 0.65
     with pytest.raises(ValueError, match="unknown limit"):
         L.limits_from_config({"thresholds": {"nonsense": 1.0}})

@@ -46,6 +46,9 @@ CONFIG = {
                              "approach_track": "ballasted", "bridge_track": "slab"}},
     "simulation": {"train": {"composition": ["trailer"]}, "end_x_m": 40.0, "batch_size": 2},
     "fields": FIELDS,
+    # a 0.18 s run is too short for the standards' filters (the assessment says so and stops):
+    # these tests are about batching, the assessment in a study is tested in test_workflow.py
+    "assessment": {"standard": []},
 }
 
 
@@ -269,3 +272,51 @@ def test_aggregation_refuses_stale_and_unreadable_batches(reference, tmp_path):
 
     with pytest.raises(StaleBatchError, match=r"holds samples \[0, 1\] but the design of C2 has \[0\]"):
         verify_batches([paths[0]], design[design["sample_index"] == 0], {"C2": settings})
+
+
+def test_a_batch_carries_the_assessment_of_each_sample_as_ttbpipe_assess_gives_it(tmp_path):
+    """A study sample assessed in memory (assessment.standard: gb5599 and en1990, with the twist
+    monitors) gives the same processed values and utilisations as the profiles applied to the
+    same run by ttbpipe.assessment.assess (second path: the run repeated with run_coupled and
+    assessed from its table; exact equality, the runs are deterministic), and the batch's
+    provenance carries each row's clause and category for the report."""
+    from ttbpipe.assessment import assess
+    from ttbpipe.assessment.columns import utilisation_column, value_column
+    from ttbpipe.assessment.study import resolve_assessment, run_case
+    from ttbpipe.simulation.coupled import run_coupled
+
+    config = copy.deepcopy(CONFIG)
+    config["study"]["scenarios"]["fields"]["samples"] = 1
+    config["simulation"]["end_x_m"] = 90.0           # 0.8 s of run: the 2 m windows fit
+    config["assessment"] = {"standard": ["gb5599", "en1990"]}
+    design = build_design(config["study"], latest_campaign="2024-01-15", horizons_months=[])
+    simulate_design(design, config, {}, str(tmp_path), batch_size=1)
+    path = batch_paths(str(tmp_path), "C2", 0, 0)[0]
+    extremes = pd.read_parquet(path)
+    meta = read_provenance(path)["assessment"]
+    assert {(m["profile"], m["index"]) for m in meta} >= {
+        ("gb5599", "wheel_unloading_ratio"), ("en1990", "deck_twist_m")}
+    assert not any(c.startswith(("en14363_", "en12299_")) for c in extremes.columns)
+
+    # the same sample outside the study: its case, the field factors, run_coupled, assess
+    sim = study_samples.resolve_simulation(config["simulation"])
+    assessment = resolve_assessment(config["assessment"])
+    irr = sim["irregularity"]
+    case = run_case(study_samples.build_case(
+        sim, config["structure"], irregularity={
+            "source": "synthetic", "spectrum": irr["spectrum"], "dx_m": irr["dx_m"],
+            "fade_in_m": irr["fade_in_m"],
+            "seed": study_samples.mean_spectrum_seed(config["study"]["seed"])}), assessment)
+    factors = study_samples.field_factors(FIELDS, config["structure"], config["study"]["seed"],
+                                          "C2", 0)
+    table, summary = run_coupled(case, factors=factors)
+    for name in ("gb5599", "en1990"):
+        rows = assess(table, summary, name, config=case)
+        for row in rows.itertuples():
+            assert extremes[value_column(name, row.index)].iloc[0] == row.processed_value
+            if np.isfinite(row.limit):
+                assert (extremes[utilisation_column(name, row.index)].iloc[0]
+                        == row.utilisation)
+    # the processed unloading ratio is below the raw maximum over every step (filtering)
+    assert (extremes["gb5599_wheel_unloading_ratio"].iloc[0]
+            < extremes["max_wheel_unloading_ratio"].iloc[0])

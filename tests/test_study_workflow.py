@@ -41,21 +41,28 @@ simulation:
   batch_size: 1
 fields:
   variance_fraction: 0.9
+assessment:
+  standard: []   # a 0.15 s run is too short for the standards' filters
 """
 
 
-def _incomplete(workdir: Path) -> set[str]:
-    """Outputs Snakemake marked incomplete (jobs it had not seen finish when it was stopped):
-    .snakemake/incomplete/<urlsafe base64 of the path>, long names split into '@' chunks."""
+def _recorded(workdir: Path, kind: str) -> set[str]:
+    """Outputs Snakemake recorded under .snakemake/<kind>: ``incomplete`` (jobs it had not seen
+    finish when it was stopped) or ``metadata`` (jobs it registered as finished). Each is a
+    file named by the urlsafe base64 of the output's path, long names split into '@' chunks."""
     import base64
 
-    root = workdir / ".snakemake" / "incomplete"
+    root = workdir / ".snakemake" / kind
     out = set()
     for path in root.rglob("*") if root.is_dir() else []:
         if path.is_file() and path.name != "migration_underway":
             parts = path.relative_to(root).parts
             out.add(base64.urlsafe_b64decode("".join(p.lstrip("@") for p in parts)).decode())
     return out
+
+
+def _incomplete(workdir: Path) -> set[str]:
+    return _recorded(workdir, "incomplete")
 
 
 def _start(cmd: list[str], cwd: Path, env: dict) -> tuple[subprocess.Popen, list[str]]:
@@ -74,31 +81,52 @@ def _cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "snakemake", *args, "--cores", "2", "--configfile", "tiny.yaml"]
 
 
-@pytest.mark.slow
-def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
-    _copy_repository(tmp_path)
-    (tmp_path / "tiny.yaml").write_text(TINY_STUDY)
-    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
-    root = tmp_path / "results" / "study" / "batches"   # <digest>/<scenario>/...
-    proc, output = _start(_cmd("results/study/extremes.parquet"), tmp_path, env)
+def _interrupted_run(workdir: Path, env: dict) -> tuple[Path, dict[str, int]]:
+    """Run the tiny study in ``workdir`` and interrupt it (SIGINT to its process group, as
+    Ctrl-C) once Snakemake has registered a finished batch; (batch folder, {file: mtime} of the
+    batches it had registered) or None when the run ended before the interruption took."""
+    workdir.mkdir(parents=True)
+    _copy_repository(workdir)
+    (workdir / "tiny.yaml").write_text(TINY_STUDY)
+    root = workdir / "results" / "study" / "batches"   # <digest>/<scenario>/...
+    proc, output = _start(_cmd("results/study/extremes.parquet"), workdir, env)
     deadline = time.monotonic() + 180
     # interrupt once Snakemake has registered a finished batch (a batch whose files exist but
-    # whose job Snakemake has not seen end is, rightly, marked incomplete and redone)
-    while time.monotonic() < deadline and not re.search(
-            r"Finished jobid: \d+ \(Rule: simulate_batch\)", "".join(output)):
+    # whose job Snakemake has not seen end is, rightly, marked incomplete and redone). Snakemake
+    # records a finished job's outputs in .snakemake/metadata at once; its log lines reach the
+    # pipe later on a loaded machine.
+    while time.monotonic() < deadline and not any(
+            "/batches/" in name for name in _recorded(workdir, "metadata")):
         if proc.poll() is not None:
             pytest.fail("snakemake ended before the first batch:\n" + "".join(output)[-3000:])
-        time.sleep(0.1)
+        time.sleep(0.02)
     os.killpg(proc.pid, signal.SIGINT)
     proc.wait(timeout=60)
+    if (workdir / "results" / "study" / "extremes.parquet").exists():
+        return None
     batches = next(root.glob("*/C3"))
     # a batch whose job Snakemake had not seen finish is marked incomplete and redone, rightly
-    pending = _incomplete(tmp_path)
+    pending = _incomplete(workdir)
     finished = {p.name: p.stat().st_mtime_ns for p in batches.glob("*.parquet")
-                if str(p.relative_to(tmp_path)) not in pending}
+                if str(p.relative_to(workdir)) not in pending}
+    return batches, finished
+
+
+@pytest.mark.slow
+def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
+    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+    # Snakemake acts on SIGINT in its scheduling loop; on a loaded machine the signal can land
+    # elsewhere and the run goes on to the end. That is a miss of the set-up, not a result: try
+    # again in a fresh copy (three times at most, then the test fails)
+    for attempt in range(3):
+        got = _interrupted_run(tmp_path / f"attempt{attempt}", env)
+        if got is not None:
+            break
+    else:
+        pytest.fail("three runs finished before they could be interrupted; the test shows nothing")
+    tmp_path = tmp_path / f"attempt{attempt}"
+    batches, finished = got
     assert finished, "no batch finished before the interruption"
-    assert not (tmp_path / "results" / "study" / "extremes.parquet").exists(), \
-        "the run finished before it could be interrupted; the test shows nothing"
     assert not [p for p in batches.iterdir() if p.name.startswith(".")], "temporary files left"
 
     rerun = subprocess.run(_cmd("results/study/extremes.parquet"), cwd=tmp_path, env=env,
@@ -121,7 +149,7 @@ def test_killed_run_resumes_without_redoing_finished_batches(tmp_path):
 
     config = yaml.safe_load((tmp_path / "config" / "config.yaml").read_text())
     tiny = yaml.safe_load(TINY_STUDY)
-    for key in ("study", "structure", "simulation"):
+    for key in ("study", "structure", "simulation", "assessment"):
         config[key] = tiny[key]
     config["fields"]["variance_fraction"] = 0.9
     design = build_design(config["study"], latest_campaign="2024-01-15", horizons_months=[])

@@ -126,7 +126,10 @@ def test_structure_static_state_and_low_speed_run():
     raw = integrate(setup)
     table = results_table(setup, raw)
     loads = table[[c for c in table.columns if c.endswith("_P_N")]].to_numpy()
-    assert np.allclose(loads[0], setup.static_wheel[:, :, 2].ravel(), rtol=1e-6)
+    # the state at t = 0 itself (the table's histories are low-passed before decimation, and a
+    # zero-phase filter at t = 0 reaches into the first steps)
+    assert np.allclose(raw.wheel[0, :, :, 2].ravel(), setup.static_wheel[:, :, 2].ravel(),
+                       rtol=1e-6)
     # steady rolling at t = 0: every vehicle acceleration (incl. the wheelset spins, whose
     # steady rates are part of the static solution) vanishes
     assert np.max(np.abs(raw.a[0])) < 1e-9

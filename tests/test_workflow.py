@@ -39,6 +39,8 @@ study:
 simulation:
   end_x_m: 100.0
   batch_size: 10
+assessment:
+  standard: []   # 0.2 m of run: too short for the standards' windows (tests/test_study_batch.py)
 """
 
 

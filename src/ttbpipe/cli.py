@@ -29,6 +29,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
                       "draw random-field samples of track and bridge parameters"),
     "stats-report": ("ttbpipe.study.cli_report",
                      "the study's tables, figures and report pages from per-batch results"),
+    "assess": ("ttbpipe.assessment.cli",
+               "evaluate a simulate result as a standard prescribes (EN 14363, GB/T 5599, "
+               "EN 1990 A2, EN 12299)"),
+    "assess-monitors": ("ttbpipe.assessment.cli_monitors",
+                        "add the monitors of the EN 1990 A2 deck checks to a case"),
 }
 
 

@@ -221,7 +221,16 @@ def validate_section(section: Mapping[str, Any] | None, *path: str, source: str 
 def validate_study_config(config: dict, source: str = "config") -> dict:
     """Validate a whole study configuration and fill in its defaults (in place); return it."""
     validate(config, STUDY_SCHEMA, source)
-    return fill_defaults(config, STUDY_SCHEMA)
+    filled = fill_defaults(config, STUDY_SCHEMA)
+    if "assessment" in filled:
+        # the profiles' options are checked against the profiles' own defaults (their one home)
+        from .assessment.study import resolve_assessment
+
+        try:
+            resolve_assessment(filled["assessment"])
+        except ValueError as exc:
+            raise ConfigurationError(f"invalid configuration ({source}): {exc}") from None
+    return filled
 
 
 def validate_scale_overlays(config: Mapping[str, Any], source: str = "config") -> None:

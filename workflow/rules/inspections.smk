@@ -68,7 +68,7 @@ rule plot_psd_vs_standard:
         report(
             results_path("figures/psd_vs_standard.png"),
             caption="../report/psd_vs_standard.rst",
-            category="1. Track irregularity",
+            category="2. Track irregularity",
         ),
     params:
         psd=config["psd"],

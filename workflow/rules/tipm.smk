@@ -86,7 +86,7 @@ rule tipm_forecast:
         figure=report(
             results_path("figures/tipm_forecast_spectra.png"),
             caption="../report/tipm_forecast_spectra.rst",
-            category="2. TIPM and spectral evolution",
+            category="3. TIPM and spectral evolution",
         ),
     params:
         tipm=TIPM,
@@ -111,7 +111,7 @@ rule tipm_validate:
         figure=report(
             results_path("figures/tipm_forecast.png"),
             caption="../report/tipm_forecast.rst",
-            category="2. TIPM and spectral evolution",
+            category="3. TIPM and spectral evolution",
         ),
     params:
         tipm=TIPM,
@@ -135,12 +135,12 @@ rule tipm_figures:
         bands=report(
             results_path("figures/tipm_psd_bands_{date}.png"),
             caption="../report/tipm_psd_bands.rst",
-            category="2. TIPM and spectral evolution",
+            category="3. TIPM and spectral evolution",
         ),
         fidelity=report(
             results_path("figures/tipm_selection_{date}.png"),
             caption="../report/tipm_selection.rst",
-            category="2. TIPM and spectral evolution",
+            category="3. TIPM and spectral evolution",
         ),
     params:
         psd=config["psd"],

@@ -32,8 +32,9 @@ from ..timestepping.zhai import zhai_predict
 from ..vehicle.dynamics import VehicleWork, vehicle_accelerations
 from ..vehicle.contact import N_COLS
 from ..vehicle.kernels import N_WHEEL_OUT
-from .recorder import (TrainRecorder, record_vehicle_output, record_wheel_output,
-                       record_wheel_step, train_recorder)
+from ..decimation import flush
+from .recorder import (TrainRecorder, record_step_channels, record_vehicle_output,
+                       record_wheel_output, record_wheel_step, train_recorder)
 
 #: What each stop of the loop means; the cause and remedy come from ttbpipe.simulation.diagnosis
 #: (the step is not always at fault).
@@ -90,8 +91,9 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
                   out_every, creep_relax):
     """Zhai explicit integration of train + structure; returns (status, step).
 
-    Output every ``out_every`` steps (row 0 = t 0) into ``train`` (ttbpipe.simulation.recorder)
-    and ``monitors``; peaks and contact loss at every step. ``creep_relax`` > 0: semi-implicit
+    Output every ``out_every`` steps (row 0 = t 0) into ``train`` (ttbpipe.simulation.recorder):
+    sampled states, and the anti-alias decimated histories of the monitors, wheel forces and
+    vehicle DOFs, fed at every step; peaks and contact loss at every step. ``creep_relax`` > 0: semi-implicit
     lateral creep (its state starts from the explicit law at t = 0).
     """
     n_ws = vehicle.ws_dofs.shape[0]
@@ -118,9 +120,9 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
         step = n + 1
         if record_wheel_step(train, work.wheel, step) == 0:
             return 2, n
-        output = step % out_every == 0
-        record_monitors(monitors, disp, vel, acc, out_row if output else -1)
-        if output:
+        record_monitors(monitors, disp, vel, acc)
+        record_step_channels(train, monitors.current, work.wheel, q, a)
+        if step % out_every == 0:
             finite, big = record_vehicle_output(train, out_row, step * dt, q, a)
             if not finite:
                 return 1, n
@@ -131,6 +133,7 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
                 return 3, n
             record_wheel_output(train, out_row, work.wheel)
             out_row += 1
+    flush(train.dec)
     return 0, n_steps
 
 
@@ -193,6 +196,16 @@ class SimulationStopped(RuntimeError):
                          f"x = {self.x_lead_m:.1f} m): {STATUS_MESSAGES[status]}{big}; {text}")
 
 
+def history_dofs(model) -> tuple[np.ndarray, np.ndarray]:
+    """Vehicle DOFs whose anti-aliased histories a run keeps: the accelerations of every car
+    body's vertical, lateral, pitch and yaw DOFs (car-body floor accelerations) and every
+    wheelset's lateral displacement."""
+    from ..vehicle.model import DOF_PER_CAR, PITCH, YAW, Y, Z
+
+    acc = [DOF_PER_CAR * c + d for c in range(model.params.n_cars) for d in (Z, Y, PITCH, YAW)]
+    return np.array(acc, dtype=np.int64), np.asarray(model.wheelset_dofs[:, 0], dtype=np.int64)
+
+
 def integrate(setup) -> RawResult:
     """Run the loop for a prepared case (:func:`ttbpipe.simulation.setup.prepare`); raises
     :class:`SimulationStopped` with the likely cause when it stops."""
@@ -203,8 +216,9 @@ def integrate(setup) -> RawResult:
     state = CoupledState(setup.q0.copy(), setup.v0.copy(), np.zeros(n_v), np.zeros(n_v),
                          setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s),
                          np.zeros(n_s))
-    monitors = setup.monitors.recorder(n_out) if setup.monitors is not None else no_monitors(n_out)
-    train = train_recorder(n_out, m.n_wheelsets, n_v)
+    monitors = setup.monitors.recorder() if setup.monitors is not None else no_monitors()
+    train = train_recorder(n_out, m.n_wheelsets, n_v, monitors.qty.shape[0], setup.out_every,
+                           *history_dofs(m))
     t0 = time.perf_counter()
     status, step = _coupled_loop(state, setup.vehicle, setup.packed, setup.mesh,
                                  setup.irregularity, monitors, train, setup.speed, setup.dt,

@@ -22,9 +22,9 @@ import numpy as np
 import pandas as pd
 
 from ..response_indices import PER_CAR, PER_SPAN
+from ..structure.monitors import deck_columns
 from ..vehicle.comfort import sperling_index
-from ..vehicle.model import DOF_PER_CAR, PITCH, YAW, Y, Z
-from .recorder import derailment_coefficients
+from .recorder import decimated, derailment_coefficients
 from .setup import CoupledSetup, diagnosis_limits, wheel_labels
 
 log = logging.getLogger(__name__)
@@ -35,18 +35,19 @@ CARBODY_POINTS = ("front", "centre", "rear")
 DECK_FILTER_HZ = 30.0
 
 
-def carbody_accelerations(setup: CoupledSetup, a_hist: np.ndarray) -> dict[str, np.ndarray]:
-    """Car-body floor accelerations (vertical, lateral) above the bogie pivots and at the centre.
+def carbody_accelerations(setup: CoupledSetup, acc: np.ndarray) -> dict[str, np.ndarray]:
+    """Car-body floor accelerations (vertical, lateral) above the bogie pivots and at the centre,
+    from ``acc[row, j]``: the car bodies' (z, y, pitch, yaw) accelerations, four per car.
 
     At a point x_p from the car centre (rigid body, small rotations): a_z = z'' - x_p pitch'',
     a_y = y'' + x_p yaw'' (model.point_row), at the car's centre-of-gravity height.
     """
     out = {}
     for ci, car in enumerate(setup.train.cars):
-        base = DOF_PER_CAR * ci
+        z, y, pitch, yaw = (acc[:, 4 * ci + k] for k in range(4))
         for name, xp in zip(CARBODY_POINTS, (car.bogie_half_spacing, 0.0, -car.bogie_half_spacing)):
-            out[f"car{ci + 1}_body_{name}_az_m_s2"] = a_hist[:, base + Z] - xp * a_hist[:, base + PITCH]
-            out[f"car{ci + 1}_body_{name}_ay_m_s2"] = a_hist[:, base + Y] + xp * a_hist[:, base + YAW]
+            out[f"car{ci + 1}_body_{name}_az_m_s2"] = z - xp * pitch
+            out[f"car{ci + 1}_body_{name}_ay_m_s2"] = y + xp * yaw
     return out
 
 
@@ -54,33 +55,37 @@ def results_table(setup: CoupledSetup, raw) -> pd.DataFrame:
     """Time histories: wheel forces, contact flag, Q/P, unloading, H, car-body accelerations,
     monitors.
 
-    ``<wheel>_in_contact`` (int8, 1/0): normal force N > 0 and P > 0 at that output step. Q/P is
-    defined in contact only: |Q|/P there and 0 where the wheel is off the rail (a lifted wheel
-    with a flange force would give |Q|/0); the unloading (P0 - P)/P0 is 1 there. The loss of
-    contact itself is its own index (summary ``contact_loss_*``).
+    Forces, accelerations, displacements and monitors are the anti-aliased histories
+    (ttbpipe.decimation: low-passed before sampling, valid to the output Nyquist frequency);
+    ``<wheel>_in_contact`` (int8, 1/0) is the contact state at the output step itself (normal
+    force N > 0). Q/P is defined in contact only: |Q|/P there and 0 where the wheel is off the
+    rail (a lifted wheel with a flange force would give |Q|/0). The loss of contact itself is
+    its own index (summary ``contact_loss_*``).
     """
     m = setup.model
     labels = wheel_labels(m)
     p0 = setup.static_wheel[:, :, 2]
     train = raw.train
+    n_mon = 0 if setup.monitors is None else setup.monitors.n
+    hist = decimated(train, n_mon)
     cols: dict[str, np.ndarray] = {"time_s": train.t_out,
                                    "x_lead_m": setup.x_lead0 + setup.speed * train.t_out}
     for w, lab in enumerate(labels):
         for k, side in enumerate(("left", "right")):
-            p = train.wheel_hist[:, w, k, 2]
-            qf = train.wheel_hist[:, w, k, 1]
-            contact = (train.wheel_hist[:, w, k, 4] > 0.0) & (p > 0.0)
+            p = hist["wheel"][:, w, k, 2]
+            qf = hist["wheel"][:, w, k, 1]
+            contact = train.wheel_hist[:, w, k, 4] > 0.0
             cols[f"{lab}_{side}_P_N"] = p
             cols[f"{lab}_{side}_Q_N"] = qf
             cols[f"{lab}_{side}_in_contact"] = contact.astype(np.int8)
             cols[f"{lab}_{side}_QP"] = derailment_coefficients(qf, p, contact)
             cols[f"{lab}_{side}_unloading"] = (p0[w, k] - p) / p0[w, k]
-        cols[f"{lab}_H_N"] = train.wheel_hist[:, w, 0, 1] + train.wheel_hist[:, w, 1, 1]
-        cols[f"{lab}_y_mm"] = 1e3 * train.q_hist[:, m.wheelset_dofs[w, Y]]
-    cols.update(carbody_accelerations(setup, train.a_hist))
+        cols[f"{lab}_H_N"] = hist["wheel"][:, w, 0, 1] + hist["wheel"][:, w, 1, 1]
+        cols[f"{lab}_y_mm"] = 1e3 * hist["disp"][:, w]
+    cols.update(carbody_accelerations(setup, hist["acc"]))
     if setup.monitors is not None:
         for i, name in enumerate(setup.monitors.names):
-            cols[name] = raw.monitors.hist[:, i]
+            cols[name] = hist["monitors"][:, i]
     return pd.DataFrame(cols)
 
 
@@ -144,8 +149,7 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
         peaks = {name: float(raw.monitors.peak[i]) for i, name in enumerate(setup.monitors.names)}
         dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
         for direction, axis in (("vertical", "z"), ("lateral", "y")):
-            deck = [c for c in table.columns
-                    if c.startswith("girder_span") and c.endswith(f"_mid_{axis}_acc_m_s2")]
+            deck = [c for cols in deck_columns(table.columns, axis).values() for c in cols]
             rail = [k for k in peaks if k.startswith("rail_") and k.endswith(f"_{axis}_acc_m_s2")]
             if deck:
                 out[f"max_deck_{direction}_acc_m_s2"] = max(
@@ -160,12 +164,10 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
         out[PER_CAR[0 if direction == "vertical" else 1].format(car=car[3:])] = float(value)
     if setup.monitors is not None:
         dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
-        for s in range(1, setup.n_spans + 1):
-            for axis, name in zip(("z", "y"), PER_SPAN):
-                col = f"girder_span{s}_mid_{axis}_acc_m_s2"
-                if col in table.columns:
-                    out[name.format(span=s)] = lowpass_peak(table[col].to_numpy(float), dt_out,
-                                                            deck_filter_hz)
+        for axis, name in zip(("z", "y"), PER_SPAN):
+            for s, cols in deck_columns(table.columns, axis).items():
+                out[name.format(span=s)] = max(lowpass_peak(table[c].to_numpy(float), dt_out,
+                                                            deck_filter_hz) for c in cols)
     return out
 
 

@@ -8,8 +8,12 @@ The structure's monitors are recorded by the recorder the structure's own loops 
   largest Q/P = |F_y|/F_z over the steps in contact (Q/P is defined in contact only), per
   wheelset the largest |F_y,left + F_y,right| (H), and the loss of wheel-rail contact (normal
   force N = 0): events, steps without contact, the longest event and where it started;
-* at output steps: the wheel forces (F_x, F_y, F_z, y_rel, N) and the vehicle's displacements and
-  accelerations.
+* at every step, into an anti-alias decimator (:mod:`ttbpipe.decimation`) with the structure's
+  monitors: the wheel forces (F_x, F_y, F_z) and the vehicle accelerations and displacements the
+  results need (car bodies, wheelsets), so their histories are valid to the output Nyquist
+  frequency;
+* at output steps, sampled as they are: the wheel table (F_x, F_y, F_z, y_rel, N; N tells the
+  contact state) and the vehicle's displacements and accelerations (the raw states).
 """
 
 from __future__ import annotations
@@ -19,28 +23,78 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from ..decimation import push
+
 #: Train records of a run with ``n_out`` output rows (see :func:`train_recorder`):
-#: t_out[row]; wheel_hist[row, ws, side] = (F_x, F_y, F_z, y_rel, N); q_hist, a_hist[row, dof];
-#: wheel_peak[ws, side] = (max F_z, min F_z, max |F_y|, max Q/P in contact); h_peak[ws];
-#: contact_loss[ws, side] = (events, steps without contact, longest event, its first step, first
-#: step of the event under way or -1, first step of the first event or -1), in steps (step s is
-#: the state at t = s dt, so an event of k steps lasts k dt).
+#: t_out[row]; wheel_hist[row, ws, side] = (F_x, F_y, F_z, y_rel, N) sampled; q_hist, a_hist[row,
+#: dof] sampled; wheel_peak[ws, side] = (max F_z, min F_z, max |F_y|, max Q/P in contact);
+#: h_peak[ws]; contact_loss[ws, side] = (events, steps without contact, longest event, its first
+#: step, first step of the event under way or -1, first step of the first event or -1), in steps
+#: (step s is the state at t = s dt, so an event of k steps lasts k dt); the channels decimated
+#: with an anti-alias filter: the monitors, then F_x, F_y, F_z of every wheel, then the
+#: accelerations of ``acc_dofs`` and the displacements of ``disp_dofs`` (``values``: the current
+#: step's, ``dec``: the decimator and its output rows).
 TrainRecorder = namedtuple("TrainRecorder", ["t_out", "wheel_hist", "q_hist", "a_hist",
-                                             "wheel_peak", "h_peak", "contact_loss"])
+                                             "wheel_peak", "h_peak", "contact_loss", "acc_dofs",
+                                             "disp_dofs", "values", "dec"])
 
 #: Columns of wheel_hist.
 WHEEL_HISTORY_COLUMNS = ("F_x", "F_y", "F_z", "y_rel", "N")
+#: Decimated wheel-force channels per wheel (indices into the wheel table).
+WHEEL_FORCE_CHANNELS = (0, 1, 2)
 
 
-def train_recorder(n_out: int, n_wheelsets: int, n_dof: int) -> TrainRecorder:
+def train_recorder(n_out: int, n_wheelsets: int, n_dof: int, n_monitors: int, out_every: int,
+                   acc_dofs: np.ndarray, disp_dofs: np.ndarray) -> TrainRecorder:
     """Empty records (peaks at their neutral values, no contact loss)."""
+    from ..decimation import decimator
+
     wheel_peak = np.zeros((n_wheelsets, 2, 4))
     wheel_peak[:, :, 1] = np.inf
     contact_loss = np.zeros((n_wheelsets, 2, 6), dtype=np.int64)
     contact_loss[:, :, 3:] = -1
+    acc_dofs = np.asarray(acc_dofs, dtype=np.int64)
+    disp_dofs = np.asarray(disp_dofs, dtype=np.int64)
+    n_channels = (n_monitors + 2 * n_wheelsets * len(WHEEL_FORCE_CHANNELS) + acc_dofs.size
+                  + disp_dofs.size)
     return TrainRecorder(np.zeros(n_out), np.zeros((n_out, n_wheelsets, 2, 5)),
                          np.zeros((n_out, n_dof)), np.zeros((n_out, n_dof)), wheel_peak,
-                         np.zeros(n_wheelsets), contact_loss)
+                         np.zeros(n_wheelsets), contact_loss, acc_dofs, disp_dofs,
+                         np.zeros(n_channels), decimator(n_channels, n_out, out_every))
+
+
+def decimated(rec: TrainRecorder, n_monitors: int) -> dict[str, np.ndarray]:
+    """The anti-aliased histories of a run: {"monitors": (n_out, n_monitors), "wheel":
+    (n_out, n_ws, 2, 3) F_x, F_y, F_z, "acc": (n_out, len(acc_dofs)), "disp": ...}."""
+    out = rec.dec.out
+    n_ws = rec.wheel_peak.shape[0]
+    a = n_monitors
+    b = a + 2 * n_ws * len(WHEEL_FORCE_CHANNELS)
+    c = b + rec.acc_dofs.size
+    return {"monitors": out[:, :a], "wheel": out[:, a:b].reshape(out.shape[0], n_ws, 2, -1),
+            "acc": out[:, b:c], "disp": out[:, c:]}
+
+
+@njit(cache=True)
+def record_step_channels(rec, monitor_values, wheel, q, a):
+    """Push this step's decimated channels (monitors, wheel forces, vehicle DOFs)."""
+    values = rec.values
+    i = 0
+    for m in range(monitor_values.shape[0]):
+        values[i] = monitor_values[m]
+        i += 1
+    for w in range(wheel.shape[0]):
+        for k in range(2):
+            for c in range(3):
+                values[i] = wheel[w, k, c]
+                i += 1
+    for j in range(rec.acc_dofs.shape[0]):
+        values[i] = a[rec.acc_dofs[j]]
+        i += 1
+    for j in range(rec.disp_dofs.shape[0]):
+        values[i] = q[rec.disp_dofs[j]]
+        i += 1
+    push(rec.dec, values)
 
 
 @njit(cache=True)

@@ -42,12 +42,12 @@ class LimitNotEvaluable(ValueError):
 class LimitContext:
     """Inputs some thresholds need when the results table does not carry them.
 
-    ``train_speed_kmh`` and ``static_wheel_load_N`` are used only when the extremes table has no
-    ``train_speed_m_s`` / ``static_wheel_load_N`` column.
+    ``train_speed_kmh`` and ``static_axle_load_N`` are used only when the extremes table has no
+    ``train_speed_m_s`` / ``static_axle_load_N`` column.
     """
 
     train_speed_kmh: float | None = None
-    static_wheel_load_N: float | None = None
+    static_axle_load_N: float | None = None
 
 
 @dataclass(frozen=True)
@@ -109,7 +109,7 @@ class SpeedDependentLimit:
 
 @dataclass(frozen=True)
 class StaticLoadLimit:
-    """Lateral wheelset force ``H > constant + P0 / divisor`` (N), P0 the static wheel load.
+    """Lateral wheelset force ``H > constant + P0 / divisor`` (N), P0 the static axle load.
 
     Source: GB/T 5599-2019, H <= 15 + P0/3 kN [V: physics.md section 4]; the
     Prud'homme / TB 10621 / EN 14363 variant 10 + P0/3 kN is [M].
@@ -125,14 +125,14 @@ class StaticLoadLimit:
     category: str = "limit"
 
     def thresholds(self, df: pd.DataFrame, context: LimitContext = LimitContext()) -> np.ndarray:
-        if "static_wheel_load_N" in df.columns:
-            p0 = df["static_wheel_load_N"].to_numpy(dtype=float)
-        elif context.static_wheel_load_N is not None:
-            p0 = np.full(len(df), float(context.static_wheel_load_N))
+        if "static_axle_load_N" in df.columns:
+            p0 = df["static_axle_load_N"].to_numpy(dtype=float)
+        elif context.static_axle_load_N is not None:
+            p0 = np.full(len(df), float(context.static_axle_load_N))
         else:
             raise LimitNotEvaluable(
-                f"limit {self.name!r} needs the static wheel load P0: write column "
-                "static_wheel_load_N in the extremes tables or set limits.static_wheel_load_N")
+                f"limit {self.name!r} needs the static axle load P0: write column "
+                "static_axle_load_N in the extremes tables or set limits.static_axle_load_N")
         return self.constant + p0 / self.divisor
 
     def threshold_text(self) -> str:
@@ -201,7 +201,7 @@ def limits_from_config(section: Mapping[str, Any] | None) -> tuple[list[Limit], 
     """Limits and context from the ``limits:`` section of the configuration.
 
     Keys (all optional): ``deck_track_type`` (ballasted | ballastless), ``train_speed_kmh``,
-    ``static_wheel_load_N``, ``thresholds`` (name -> SI value replacing a constant default),
+    ``static_axle_load_N``, ``thresholds`` (name -> SI value replacing a constant default),
     ``disabled`` (names to skip). Unknown limit names are an error.
     """
     section = dict(section or {})
@@ -213,7 +213,7 @@ def limits_from_config(section: Mapping[str, Any] | None) -> tuple[list[Limit], 
     for name, value in (section.get("thresholds") or {}).items():
         if not isinstance(by_name[name], ConstantLimit):
             raise ValueError(f"config limits.thresholds: {name!r} is not a constant limit; "
-                             "set train_speed_kmh / static_wheel_load_N instead")
+                             "set train_speed_kmh / static_axle_load_N instead")
         log.info("limit %s: threshold %s replaced by configured %s", name,
                  by_name[name].threshold, value)
         old = by_name[name]
@@ -223,5 +223,5 @@ def limits_from_config(section: Mapping[str, Any] | None) -> tuple[list[Limit], 
     if disabled:
         log.info("limits disabled by configuration: %s", sorted(disabled))
     context = LimitContext(train_speed_kmh=section.get("train_speed_kmh"),
-                           static_wheel_load_N=section.get("static_wheel_load_N"))
+                           static_axle_load_N=section.get("static_axle_load_N"))
     return [by_name[lim.name] for lim in limits if lim.name not in disabled], context

@@ -87,8 +87,8 @@ def plot_exceedance_convergence(curves: Sequence[pd.DataFrame], *, log_x: bool =
                                 ncols: int = 2) -> Figure:
     """One panel per curve of :func:`ttbpipe.stats.reliability.convergence_curve`.
 
-    Estimate (line), two-sided confidence band (shaded) and, while no sample exceeds, the
-    one-sided upper bound (dashed) against the number of samples in sample-index order.
+    Estimate (line) and two-sided confidence band (shaded; the one interval of every probability
+    the study reports) against the number of samples in sample-index order.
     """
     curves = list(curves)
     if not curves:
@@ -103,10 +103,6 @@ def plot_exceedance_convergence(curves: Sequence[pd.DataFrame], *, log_x: bool =
         ax.fill_between(n, curve["ci_low"], curve["ci_high"], step="post", alpha=0.3,
                         label=f"{level} CI ({a.get('method', '')})")
         ax.step(n, curve["probability"], where="post", color="C0", label="estimate")
-        zero = (curve["n_exceed"] == 0).to_numpy()
-        if zero.any():
-            ax.step(n[zero], curve["upper_one_sided"].to_numpy()[zero], where="post", ls="--",
-                    color="C3", label=f"one-sided {level} upper bound, no exceedance")
         if "sufficient" in curve and bool(curve["sufficient"].iloc[-1]):
             failing = np.flatnonzero(~curve["sufficient"].to_numpy(dtype=bool))
             n_ok = n[failing[-1] + 1] if failing.size else n[0]
@@ -114,7 +110,7 @@ def plot_exceedance_convergence(curves: Sequence[pd.DataFrame], *, log_x: bool =
         if log_x and n[-1] > 20:
             ax.set_xscale("log")
         ax.set_xlabel("number of samples (sample-index order)")
-        ax.set_ylabel("P(max index > limit) (–)")
+        ax.set_ylabel("P(index > limit) (–)")
         ax.set_ylim(bottom=0)
         threshold = str(a.get("threshold", "")).replace("^2", "²")
         ax.set_title(f"{a.get('description', a.get('limit', ''))} > {threshold}\n"

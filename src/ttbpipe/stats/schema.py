@@ -75,8 +75,11 @@ EXTREMES_CONTEXT_COLUMNS: tuple[ColumnSpec, ...] = (
                "train speed of the run; selects the wheel-unloading limit (0.65 up to 160 km/h, "
                "0.8 above)", lower=0.0),
     ColumnSpec("static_wheel_load_N", "float64", "N",
-               "static wheel load P0 of the governing wheel; sets the lateral wheelset force "
-               "limit 15 kN + P0/3", lower=0.0),
+               "smallest static wheel load of the train (static equilibrium of the run)",
+               lower=0.0),
+    ColumnSpec("static_axle_load_N", "float64", "N",
+               "smallest static axle load P0 of the train; sets the lateral wheelset force "
+               "limit 15 kN + P0/3 (GB/T 5599-2019)", lower=0.0),
 )
 
 RESPONSE_INDEX_COLUMNS: tuple[ColumnSpec, ...] = tuple(
@@ -112,7 +115,8 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
 
 #: Dimensionless quantity stems that need no suffix (the unit is 1).
 DIMENSIONLESS_STEMS: tuple[str, ...] = (
-    "derailment_coefficient", "wheel_unloading_ratio", "sperling")
+    "derailment_coefficient", "wheel_unloading_ratio", "sperling", "Y_Q", "N_MV",
+    "deflection_ratio", "utilisation")
 
 def unit_of(column: str) -> str:
     """Unit of a quantity column from its name (suffix rule of ``docs/results_schema.md``).
@@ -386,6 +390,7 @@ def example_extremes(sample_indices, scenario: str = "C1", *, seed: int = 0,
     df.insert(3, "seed_entropy", df.pop("seed_entropy").astype("string"))
     df.insert(4, "train_speed_m_s", np.full(len(df), 300 / 3.6))
     df.insert(5, "static_wheel_load_N", np.full(len(df), 70e3))
+    df.insert(6, "static_axle_load_N", np.full(len(df), 140e3))
     return df
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from . import properties as P
 from .carriers import (CARRIER_PARAMETERS, PARAMETER_CARRIER, carrier_positions, factored,
                        nominal_properties)
+from .damping import girder_damping_ratio
 from .girder import SpanReduction, hermite_shape, reduce_span
 from .kernels import StructurePacked
 from .layout import Layout, make_layout
@@ -155,7 +156,8 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         roll_inertia = mass / float(g_c["area_m2"]) * (Iy + Iz)
         red = reduce_span(float(x0), float(L), ne, E, E / (2 * (1 + nu_g)), mass, Iy, Iz,
                           np.full(ne, float(g_c["J_m4"])), roll_inertia,
-                          float(g_c["damping_ratio"]), g_c["rayleigh_frequencies_hz"],
+                          girder_damping_ratio(float(L), g_c), str(g_c["damping_model"]),
+                          g_c["rayleigh_frequencies_hz"],
                           float(g_c["max_mode_frequency_hz"]),
                           int(g_c["min_modes_per_direction"]))
         spans.append(red)

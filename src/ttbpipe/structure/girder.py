@@ -10,10 +10,11 @@ reduced to
 * the fixed-interface normal modes of the span with pinned ends (the simply supported modes),
   kept up to ``max_mode_frequency_hz``.
 
-(Craig & Bampton 1968, AIAA J 6:1313.) Rayleigh damping C = alpha M + beta K (paper eq. 18) is
-applied on the reduced matrices, so every kept mode has the damping eq. 18 assigns it and no
-high-frequency element mode exists to be over-damped or to limit the explicit time step (the
-"stiffness-proportional damping trap" of a finely meshed girder, see docs/structure.md).
+(Craig & Bampton 1968, AIAA J 6:1313.) The damping is applied on the reduced matrices
+(:mod:`ttbpipe.structure.damping`: modal damping of every kept mode, EN 1991-2 Table 6.6 values
+by default, or the paper's Rayleigh eq. 18), so no high-frequency element mode exists to be
+over-damped or to limit the explicit time step (the "stiffness-proportional damping trap" of a
+finely meshed girder, see docs/structure.md).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import linalg
 
+from .damping import span_damping_matrix
 from .shape_functions import hermite_shape  # noqa: F401  (girder users import it from here)
 
 
@@ -60,7 +62,9 @@ class SpanReduction:
     C: np.ndarray
     mode_frequencies_hz: list       # per direction: fixed-interface frequencies kept
     all_frequencies_hz: list        # per direction: all fixed-interface frequencies of the mesh
-    rayleigh_alpha: float
+    damping_ratio: float            # zeta given to the kept modes (modal) or at the Rayleigh pair
+    damping_model: str              # modal | rayleigh
+    rayleigh_alpha: float           # 0 for modal damping
     rayleigh_beta: float
 
     @property
@@ -105,9 +109,10 @@ def _craig_bampton(K: np.ndarray, M: np.ndarray, boundary: list[int], f_max_hz: 
 
 def reduce_span(start_m: float, length_m: float, n_el: int, E: np.ndarray, G: np.ndarray,
                 mass: np.ndarray, Iy: np.ndarray, Iz: np.ndarray, J: np.ndarray,
-                roll_inertia: np.ndarray, zeta: float, rayleigh_hz, f_max_hz: float,
-                n_min: int) -> SpanReduction:
-    """Mesh, assemble and reduce one span; per-element arrays have length n_el."""
+                roll_inertia: np.ndarray, zeta: float, damping_model: str, rayleigh_hz,
+                f_max_hz: float, n_min: int) -> SpanReduction:
+    """Mesh, assemble and reduce one span; per-element arrays have length n_el; damping
+    ``zeta`` by ``damping_model`` (:func:`ttbpipe.structure.damping.span_damping_matrix`)."""
     h = length_m / n_el
     nn = n_el + 1
     Kv = np.zeros((2 * nn, 2 * nn)); Mv = np.zeros_like(Kv)
@@ -140,14 +145,10 @@ def reduce_span(start_m: float, length_m: float, n_el: int, E: np.ndarray, G: np
         M += full.T @ Md @ full
         K += full.T @ Kd @ full
     K = 0.5 * (K + K.T); M = 0.5 * (M + M.T)
-    if rayleigh_hz is None:
-        first = np.sort(np.concatenate([av, al, at]))[:2]
-        w1, w2 = 2 * np.pi * first
-    else:
-        w1, w2 = 2 * np.pi * np.asarray(rayleigh_hz, dtype=float)
-    alpha = 2 * zeta * w1 * w2 / (w1 + w2)   # paper eq. 18
-    beta = 2 * zeta / (w1 + w2)
+    C, alpha, beta = span_damping_matrix(M, K, [fv, fl, ft], zeta, damping_model, rayleigh_hz,
+                                         all_frequencies_hz=[av, al, at])
     return SpanReduction(start_m=start_m, length_m=length_m, node_x=start_m + h * np.arange(nn),
-                         basis=basis, M=M, K=K, C=alpha * M + beta * K,
+                         basis=basis, M=M, K=K, C=C,
                          mode_frequencies_hz=[fv, fl, ft], all_frequencies_hz=[av, al, at],
+                         damping_ratio=zeta, damping_model=damping_model,
                          rayleigh_alpha=alpha, rayleigh_beta=beta)

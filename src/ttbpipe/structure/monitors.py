@@ -9,6 +9,7 @@ Column names carry units: ``<name>_<dir>_disp_mm``, ``_vel_m_s``, ``_acc_m_s2`` 
 
 from __future__ import annotations
 
+import re
 from collections import namedtuple
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
@@ -41,32 +42,33 @@ class MonitorSet:
     def n(self) -> int:
         return len(self.names)
 
-    def recorder(self, n_out: int) -> "MonitorRecorder":
-        """A :class:`MonitorRecorder` of these monitors with room for ``n_out`` output rows."""
+    def recorder(self) -> "MonitorRecorder":
+        """A :class:`MonitorRecorder` of these monitors."""
         return MonitorRecorder(self.ptr, self.dof, self.coef, self.qty, self.scale,
-                               np.zeros((n_out, self.n)), np.zeros(self.n))
+                               np.zeros(self.n), np.zeros(self.n))
 
 
 #: Monitors as a time loop records them: the compiled rows (ptr, dof, coef, qty), the unit
-#: scale of each column, the decimated history hist[row, monitor] (scaled) and the largest
-#: |value| over every step, peak[monitor] (scaled). Shared by the coupled train-track-bridge
-#: loop and the structure's moving-load loop.
-MonitorRecorder = namedtuple("MonitorRecorder", ["ptr", "dof", "coef", "qty", "scale", "hist",
+#: scale of each column, the values of the current step current[monitor] (scaled) and the
+#: largest |value| over every step, peak[monitor] (scaled). Shared by the coupled
+#: train-track-bridge loop and the structure's moving-load loop, which decimate ``current``
+#: into their histories with an anti-alias filter (ttbpipe.decimation).
+MonitorRecorder = namedtuple("MonitorRecorder", ["ptr", "dof", "coef", "qty", "scale", "current",
                                                  "peak"])
 
 
-def no_monitors(n_out: int = 1) -> MonitorRecorder:
+def no_monitors() -> MonitorRecorder:
     """A recorder without monitors (rigid track)."""
     i0, f0 = np.zeros(0, np.int64), np.zeros(0)
-    return MonitorRecorder(np.zeros(1, np.int64), i0, f0, i0, f0, np.zeros((n_out, 0)), f0)
+    return MonitorRecorder(np.zeros(1, np.int64), i0, f0, i0, f0, f0, np.zeros(0))
 
 
 @njit(cache=True)
-def record_monitors(rec, disp, vel, acc, row):
+def record_monitors(rec, disp, vel, acc):
     """Evaluate every monitor at this step: sum_j coef_j q[dof_j] with q = disp, vel or acc
-    (qty 0, 1, 2), times its unit scale; update ``rec.peak``; write ``rec.hist[row]`` when
-    ``row >= 0`` (an output step). Returns the largest |unscaled| displacement monitor value
-    (NaN if one is NaN), for the loops' blow-up checks."""
+    (qty 0, 1, 2), times its unit scale, into ``rec.current``; update ``rec.peak``. Returns the
+    largest |unscaled| displacement monitor value (NaN if one is NaN), for the loops' blow-up
+    checks."""
     largest = 0.0
     for m in range(rec.qty.shape[0]):
         s = 0.0
@@ -83,8 +85,7 @@ def record_monitors(rec, disp, vel, acc, row):
         s *= rec.scale[m]
         if abs(s) > rec.peak[m]:
             rec.peak[m] = abs(s)
-        if row >= 0:
-            rec.hist[row, m] = s
+        rec.current[m] = s
     return largest
 
 
@@ -134,7 +135,12 @@ def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
             raise ValueError(f"monitor {name}: x={x} m is not on span {s}")
         rz, ry, rr = red.rows_at(x)
         idx = np.arange(model.dof_info["span_dof0"][s], model.dof_info["span_dof0"][s] + red.n)
-        return {"z": (idx, rz), "y": (idx, ry), "roll": (idx, rr)}
+        # a point of the cross-section off the shear centre, as the bearings (z + e roll) and
+        # the CA mortar (y - h roll) see the girder: e to the left (rail 0's side), h upwards
+        e = float(spec.get("lateral_offset_m", 0.0))
+        h = (float(model.config["girder"]["deck_height_m"]) if spec.get("deck_surface")
+             else float(spec.get("height_m", 0.0)))
+        return {"z": (idx, rz + e * rr), "y": (idx, ry - h * rr), "roll": (idx, rr)}
     if kind == "pier":
         p = int(spec.get("pier", 0))
         if not 0 <= p < model.dof_info["n_piers"]:
@@ -171,9 +177,39 @@ def compile_monitors(model, specs: Sequence[Mapping[str, Any]]) -> MonitorSet:
                       np.array(coef, float), np.array(qty, np.int64), np.array(scale, float))
 
 
+_DECK_COLUMN = re.compile(r"^deck_(left|right)_span(\d+)_mid_([zy])_(acc_m_s2|disp_mm)$")
+_GIRDER_COLUMN = re.compile(r"^girder_span(\d+)_mid_([zy])_(acc_m_s2|disp_mm)$")
+
+
+def deck_columns(columns, axis: str, quantity: str = "acc_m_s2") -> dict[int, list[str]]:
+    """{span (1-based): history columns of the deck at midspan} for ``axis`` z | y.
+
+    The deck-surface monitors under the rails (:func:`default_monitors`) where the run has them,
+    else the girder's shear centre (runs with their own monitor lists).
+    """
+    deck: dict[int, list[str]] = {}
+    girder: dict[int, list[str]] = {}
+    for c in columns:
+        m = _DECK_COLUMN.match(c)
+        if m and m.group(3) == axis and m.group(4) == quantity:
+            deck.setdefault(int(m.group(2)), []).append(c)
+        m = _GIRDER_COLUMN.match(c)
+        if m and m.group(2) == axis and m.group(3) == quantity:
+            girder.setdefault(int(m.group(1)), []).append(c)
+    return dict(sorted((deck or girder).items()))
+
+
+def deck_monitor_name(side: str, span: int) -> str:
+    """Name of the default deck monitor under rail ``side`` (left | right) of 1-based ``span``."""
+    return f"deck_{side}_span{span}_mid"
+
+
 def default_monitors(model) -> list[dict]:
-    """Rail, slab and girder at every span's midspan, and every pier."""
+    """At every span's midspan: the left rail, the slab, the girder's shear centre and the deck
+    surface under each rail (vertical under both, lateral under the left: the deck surface's
+    lateral motion is the same under both); every pier."""
     out = []
+    half_gauge = 0.5 * float(model.config["fastener"]["rail_centre_distance_m"])
     for s, red in enumerate(model.spans):
         x = red.start_m + 0.5 * red.length_m
         if model.packed.n_rails:
@@ -185,6 +221,11 @@ def default_monitors(model) -> list[dict]:
                         "directions": ["z", "y"]})
         out.append({"name": f"girder_span{s + 1}_mid", "kind": "girder", "span": s,
                     "position": 0.5, "directions": ["z", "y"]})
+        for side, e, directions in (("left", half_gauge, ["z", "y"]),
+                                    ("right", -half_gauge, ["z"])):
+            out.append({"name": deck_monitor_name(side, s + 1), "kind": "girder", "span": s,
+                        "position": 0.5, "deck_surface": True, "lateral_offset_m": e,
+                        "directions": directions})
     for p in range(model.dof_info["n_piers"]):
         out.append({"name": f"pier{p + 1}", "kind": "pier", "pier": p,
                     "directions": ["z", "y"]})

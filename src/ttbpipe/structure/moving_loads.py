@@ -3,8 +3,9 @@
 Loads enter the rails through the Hermite shape functions of the element they are in
 (:func:`ttbpipe.structure.rail_mesh.add_rail_point_load`), exactly as the vehicle's contact
 forces do; the time loop (:func:`_moving_load_loop`) uses the same Zhai step
-(:mod:`ttbpipe.timestepping.zhai`) and the same monitor recorder
-(:func:`ttbpipe.structure.monitors.record_monitors`) as the coupled loop. For girder-only validation models (``layout.bridge_track: none``) the loads act on the
+(:mod:`ttbpipe.timestepping.zhai`), the same monitor recorder
+(:func:`ttbpipe.structure.monitors.record_monitors`) and the same anti-alias decimation of the
+histories (:mod:`ttbpipe.decimation`) as the coupled loop. For girder-only validation models (``layout.bridge_track: none``) the loads act on the
 girder axis through the span's reduced basis instead (``loads.target: girder``).
 
 Sign convention: forces in the structure's axes (z up, y left); a wheel pressing on the rail is
@@ -23,6 +24,7 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
+from ..decimation import decimator, flush, push
 from ..timestepping.limits import check_time_step, stable_time_step
 from ..timestepping.zhai import zhai_predict
 from .kernels import structure_accelerations
@@ -155,9 +157,9 @@ StructureState = namedtuple("StructureState", ["disp", "vel", "acc", "acc_prev",
 
 
 @njit(cache=True)
-def _moving_load_loop(packed, mesh, loads, state, rec, t_out, dt, n_steps, out_every, blowup_m):
-    """Zhai time loop with moving point loads on the rails; records the monitors every
-    ``out_every`` steps (row k: t = k out_every dt).
+def _moving_load_loop(packed, mesh, loads, state, rec, dec, dt, n_steps, blowup_m):
+    """Zhai time loop with moving point loads on the rails; records the monitors at every step
+    into the anti-alias decimator ``dec`` (its rows: t = k out_every dt).
 
     Load i: rail loads.rail[i], position x = x0[i] + speed[i] t, forces (Fz, Fy, Mx) = F0[i] +
     F1[i] sin(2 pi freq[i] t + phase[i]). Returns the step at which a displacement monitor or a
@@ -167,7 +169,6 @@ def _moving_load_loop(packed, mesh, loads, state, rec, t_out, dt, n_steps, out_e
     n_extra = loads.extra_dofs.shape[0]
     disp, vel, acc, acc_prev, nodal_force = (state.disp, state.vel, state.acc, state.acc_prev,
                                              state.nodal_force)
-    row = 0
     for step in range(n_steps + 1):
         t = step * dt
         if step > 0:
@@ -188,16 +189,15 @@ def _moving_load_loop(packed, mesh, loads, state, rec, t_out, dt, n_steps, out_e
             for j in range(n_extra):
                 nodal_force[loads.extra_dofs[j]] += loads.extra_table[step, j]
         structure_accelerations(packed, disp, vel, nodal_force, acc)
-        if step % out_every == 0:
-            t_out[row] = t
-            largest = record_monitors(rec, disp, vel, acc, row)
-            row += 1
-            if not largest < blowup_m:
-                return step
+        largest = record_monitors(rec, disp, vel, acc)
+        push(dec, rec.current)
+        if not largest < blowup_m:
+            return step
         if step % 1000 == 0:
             for i in range(packed.n_diag):
                 if not (abs(disp[i]) < blowup_m):
                     return step
+    flush(dec)
     return -1
 
 
@@ -217,8 +217,8 @@ def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=No
     n_steps = int(round(duration / dt))
     output_every = max(1, int(output_every))
     n_out = n_steps // output_every + 1
-    rec = mons.recorder(n_out)
-    t_out = np.zeros(n_out)
+    rec = mons.recorder()
+    dec = decimator(mons.n, n_out, output_every)
     n = model.n_dof
     state = StructureState(*(np.zeros(n) for _ in range(5)))
     if loads.target == "girder":
@@ -232,8 +232,7 @@ def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=No
     t0 = time.perf_counter()
     c0 = time.process_time()
     status = _moving_load_loop(model.packed, rail_mesh(model.packed, model.rail_head_height_m),
-                               arrays, state, rec, t_out, float(dt), n_steps, output_every,
-                               float(blowup_m))
+                               arrays, state, rec, dec, float(dt), n_steps, float(blowup_m))
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0
     if status >= 0:
@@ -246,7 +245,8 @@ def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=No
                 cpu_s_per_simulated_s=cpu / (n_steps * dt))
     log.info("simulated %.3f s (%d steps of %.3g s, %d DOF) in %.2f s wall (%.2f s per "
              "simulated s)", n_steps * dt, n_steps, dt, n, wall, info["wall_s_per_simulated_s"])
-    df = pd.DataFrame(np.column_stack([t_out, rec.hist]), columns=["time_s"] + mons.names)
+    t_out = (np.arange(n_out) * output_every) * dt
+    df = pd.DataFrame(np.column_stack([t_out, dec.out]), columns=["time_s"] + mons.names)
     info["final_state"] = (state.disp, state.vel, state.acc)
     return df, info
 

@@ -77,7 +77,13 @@ GIRDER = {
     "Iz_m4": 96.435,                 # lateral bending ("I_h")
     "J_m4": 22.650,                  # torsion constant [V: "girder, alternative" row]
     "area_m2": 8.8889,               # [V: "girder, alternative" row], for the roll inertia
-    "damping_ratio": 0.05,           # zeta_b of paper eq. 18 [V]
+    # damping (ttbpipe.structure.damping): None -> EN 1991-2 Table 6.6 by span length and
+    # construction (1.0 % for a prestressed span >= 20 m) [V]; the seed paper's value is 0.05
+    # with Rayleigh damping (eq. 18) [V]
+    "damping_ratio": None,
+    "damping_model": "modal",        # modal: every kept span mode gets the ratio | rayleigh
+    "construction": "prestressed_concrete",  # steel_composite | reinforced_concrete
+    "additional_damping": False,     # EN 1991-2 eq. 6.13 (moving-load analyses of L < 30 m)
     "rayleigh_frequencies_hz": None,  # omega_1, omega_2 of eq. 18; None -> first two span modes
     "element_length_m": 1.0,         # FE mesh of each span used to compute its modes
     "max_mode_frequency_hz": 120.0,  # fixed-interface modes kept per span (see docs)

@@ -30,7 +30,8 @@ import pandas as pd
 
 from ..io import write_table
 from ..threads import WORKER_ENV
-from .samples import resolve_simulation, run_sample
+from ..assessment.study import resolve_assessment
+from .samples import ASSESSMENT_ROWS_KEY, resolve_simulation, run_sample
 
 log = logging.getLogger(__name__)
 
@@ -62,7 +63,8 @@ def _sample_kwargs(config: Mapping[str, Any], profiles: Mapping[str, str]) -> di
     return {"study_seed": int(config["study"]["seed"]),
             "sim": resolve_simulation(config.get("simulation")),
             "structure": dict(config["structure"]), "fields": config.get("fields"),
-            "profiles": dict(profiles)}
+            "profiles": dict(profiles),
+            "assessment": resolve_assessment(config.get("assessment"))}
 
 
 def _run_local(rows: pd.DataFrame, kwargs: Mapping[str, Any], progress: Progress,
@@ -129,8 +131,11 @@ def _run_dask(rows: pd.DataFrame, kwargs: Mapping[str, Any], progress: Progress,
 
 def run_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapping[str, str], *,
               label: str = "", executor: str | None = None,
-              runner: Callable = run_sample) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Simulate the design rows of one batch; (extremes, histories) in sample-index order."""
+              runner: Callable = run_sample, metadata: list | None = None
+              ) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Simulate the design rows of one batch; (extremes, histories) in sample-index order.
+    ``metadata``: a list that receives the assessed rows' metadata of the batch (clause,
+    category, limit source per profile index; the same for every sample)."""
     sim = resolve_simulation(config.get("simulation"))
     executor = executor or sim["executor"]
     kwargs = _sample_kwargs(config, profiles)
@@ -144,6 +149,9 @@ def run_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapping[s
         results = _run_dask(rows, kwargs, progress, sim.get("dask"), runner)
     else:
         raise ValueError(f"simulation.executor: {executor!r}; expected local | dask")
+    rows_meta = [r[0].pop(ASSESSMENT_ROWS_KEY, None) for r in results]
+    if metadata is not None:
+        metadata.extend(next((m for m in rows_meta if m), []))
     extremes = pd.DataFrame([r[0] for r in results])
     extremes["scenario"] = extremes["scenario"].astype("string")
     extremes["seed_entropy"] = extremes["seed_entropy"].astype("string")
@@ -159,10 +167,13 @@ def simulate_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapp
     """Run a batch and write its two tables atomically (nothing is written if a sample fails)."""
     from ..stats.schema import validate_extremes, validate_histories
 
-    extremes, histories = run_batch(rows, config, profiles, executor=executor, runner=runner)
+    assessed: list = []
+    extremes, histories = run_batch(rows, config, profiles, executor=executor, runner=runner,
+                                    metadata=assessed)
     validate_extremes(extremes, extremes_path)
     validate_histories(histories, histories_path)
-    meta = dict(config=config, samples=[int(i) for i in rows["sample_index"]], **provenance)
+    meta = dict(config=config, samples=[int(i) for i in rows["sample_index"]],
+                assessment=assessed, **provenance)
     # histories first: the extremes file is the batch's "done" marker for a reader outside Snakemake
     write_table(histories, histories_path, kind="study_histories", **meta)
     write_table(extremes, extremes_path, kind="study_extremes", **meta)

@@ -15,8 +15,8 @@ import numpy as np
 import pandas as pd
 
 from .. import io
-from .cases import (bridge_frequencies, compare_histories, forecast_limits, resonance_speeds,
-                    sweep_resonances, train_load_interval_m)
+from .cases import (SWEEP_SPEED_FACTOR, bridge_frequencies, compare_histories, forecast_limits,
+                    resonance_speeds, sweep_resonances, train_load_interval_m)
 from .samples import resolve_simulation
 
 log = logging.getLogger(__name__)
@@ -68,6 +68,8 @@ def sweep_report(sweep: pd.DataFrame, history: pd.DataFrame, layout: Mapping[str
                  "direction", "order", "frequency_hz", "load_interval_m"])
 
     # Fig. 8: maxima against speed, predicted resonances marked
+    line_speed = (None if sweep_cfg.get("line_speed_kmh") is None
+                  else float(sweep_cfg["line_speed_kmh"]))
     panels = [("max_wheel_vertical_force_N", 1e-3, "max wheel-rail vertical force (kN)"),
               ("max_wheel_lateral_force_N", 1e-3, "max wheel-rail lateral force (kN)"),
               ("max_deck_vertical_acc_m_s2", 1.0, "max midspan vertical acc. (m/s$^2$)"),
@@ -78,13 +80,19 @@ def sweep_report(sweep: pd.DataFrame, history: pd.DataFrame, layout: Mapping[str
         for r in predicted.itertuples():
             ax.axvline(r.speed_kmh, color="C3" if r.direction == "vertical" else "C2", ls="--",
                        lw=0.8, alpha=0.7)
+        if line_speed is not None:
+            for v, style in ((line_speed, ":"), (SWEEP_SPEED_FACTOR * line_speed, "-.")):
+                ax.axvline(v, color="0.3", ls=style, lw=0.9)
         ax.set_ylabel(label, fontsize=9)
         ax.grid(alpha=0.3)
     for ax in axes[1]:
         ax.set_xlabel("train speed (km/h)")
+    marks = ("" if line_speed is None else
+             f"; dotted: line speed {line_speed:g} km/h, dash-dot: {SWEEP_SPEED_FACTOR:g} x it "
+             "(EN 1991-2 6.4.6.2)")
     fig.suptitle(f"Case 1 (Fig. 8): maxima against speed; dashed: eq. 55 with f_v = "
                  f"{freqs['vertical']:.2f} Hz (red), f_l = {freqs['lateral']:.2f} Hz (green), "
-                 f"L_g = {interval:g} m", fontsize=9)
+                 f"L_g = {interval:g} m{marks}", fontsize=9)
     _save(fig, folder, "fig08_maxima_vs_speed.png")
 
     # Fig. 6: rail displacement under the wheel

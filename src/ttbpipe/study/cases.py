@@ -67,10 +67,37 @@ def apply_scale(config: MutableMapping[str, Any]) -> MutableMapping[str, Any]:
 # ----------------------------------------------------------------------------------------------
 # Case 1: speed sweep, time histories, resonance speeds
 
+#: EN 1991-2:2003 6.4.6.2(1): a dynamic analysis covers speeds up to 1.2 x the maximum line
+#: speed (standards sheet, docs/reference/standards.md [V]).
+SWEEP_SPEED_FACTOR = 1.2
+
+
 def sweep_speeds(sweep: Mapping[str, Any]) -> list[float]:
-    """Speeds of the sweep, km/h: ``speeds_kmh: [first, last, step]`` inclusive of ``last``."""
-    first, last, step = (float(v) for v in sweep["speeds_kmh"])
-    if step <= 0 or last < first:
+    """Speeds of the sweep, km/h: ``speeds_kmh: [first, last, step]`` inclusive of ``last``.
+
+    With ``line_speed_kmh`` (the line's maximum speed) the sweep must reach
+    :data:`SWEEP_SPEED_FACTOR` times it (EN 1991-2 6.4.6.2): ``last: null`` goes to the first
+    step at or above it; an explicit ``last`` below it is an error.
+    """
+    first, last, step = sweep["speeds_kmh"]
+    line = sweep.get("line_speed_kmh")
+    first, step = float(first), float(step)
+    if step <= 0:
+        raise ValueError(f"case.sweep.speeds_kmh: step {step} km/h must be > 0")
+    if line is not None:
+        required = SWEEP_SPEED_FACTOR * float(line)
+        if last is None:
+            last = first + np.ceil((required - first) / step - 1e-9) * step
+        elif float(last) < required - 1e-9:
+            raise ValueError(
+                f"case.sweep.speeds_kmh ends at {float(last):g} km/h, below {SWEEP_SPEED_FACTOR:g} x "
+                f"the line speed {float(line):g} km/h = {required:g} km/h that EN 1991-2 6.4.6.2 "
+                "asks a dynamic analysis to reach; raise the last speed or set it to null")
+    elif last is None:
+        raise ValueError("case.sweep.speeds_kmh: the last speed is null but no line_speed_kmh is "
+                         "given to derive it from (1.2 x line speed, EN 1991-2 6.4.6.2)")
+    last = float(last)
+    if last < first:
         raise ValueError(f"case.sweep.speeds_kmh [{first}, {last}, {step}]: need first <= last, "
                          "step > 0")
     n = int(np.floor((last - first) / step + 1e-9)) + 1

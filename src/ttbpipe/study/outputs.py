@@ -10,14 +10,23 @@ bounded memory; the extremes are one small row per sample) and writes, under ``o
 * ``design.parquet``: the design the outputs were made from;
 * ``extremes.parquet``: every sample's extremes, sorted by scenario and sample index;
 * ``history_statistics.parquet``: weighted mean, std and percentiles against position;
-* ``reliability.parquet``: exceedance probability, interval and verdict per (scenario, limit);
+* ``utilisation.parquet``: per scenario and assessed index (the standards of ``assessment:``,
+  docs/assessment.md) the median, 95th percentile and maximum utilisation = index / limit, the
+  sample that reached the maximum, the limit and P(utilisation > 1) with its interval
+  (:mod:`ttbpipe.study.utilisation`);
+* ``reliability.parquet``: exceedance probability, interval and verdict per (scenario, limit):
+  the assessed limits (utilisation > 1, categories ``limit`` and ``grade``) and, as category
+  ``raw``, the raw-peak thresholds of ``limits:`` (:mod:`ttbpipe.stats.limits`; not code
+  checks: the standards evaluate processed indices; without assessed columns they are the
+  limits);
 * ``convergence.parquet``: the convergence curves of every (scenario, limit);
 * ``table1_std.parquet``: the paper's Table 1, weighted std of each index per randomness
   condition (the fields scenarios; every scenario when there is none); ``table1_history_std.parquet``:
   the maximum over position of the std curve of each time-history quantity;
 * ``summary.rst`` / ``report/summary.html``: the report's first page; ``report/*.html``: the
   tables and the configuration as report pages (their text: :mod:`ttbpipe.study.report_pages`);
-* ``figures/<kind>/*.png``: convergence per scenario, PDFs of extremes (Figs. 15-16), history
+* ``figures/<kind>/*.png``: utilisation per report section (the margins to the limits),
+  convergence per scenario, PDFs of extremes (Figs. 15-16), history
   mean/std (Figs. 10-14), forecast envelopes (Fig. 17).
 
 Without a design (``design=None``, the command line without ``--design``) the outputs are made
@@ -31,6 +40,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -40,10 +50,11 @@ import pandas as pd
 from .. import io
 from ..dates import DATE_PATTERN
 from ..stats import plots, streaming, tables
+from ..assessment.columns import assessed_indices
 from ..stats.limits import limits_from_config
 from ..stats.reliability import ReliabilitySettings, assess_limits, convergence_curve
 from ..stats.schema import RESPONSE_INDICES
-from . import report_pages
+from . import report_pages, utilisation
 from .design import DESIGN_COLUMNS, FIELD_CONDITIONS, MC_IRREGULARITY, SINGLE
 
 log = logging.getLogger(__name__)
@@ -54,7 +65,7 @@ _FORECAST_LEVEL = re.compile(rf"^{DATE_PATTERN}_p[0-9.]+$")  # <target date>_p<l
 ENVELOPE_COLUMNS = ("max_deck_vertical_acc_m_s2", "max_deck_lateral_acc_m_s2",
                     "max_carbody_lateral_acc_m_s2", "max_wheel_vertical_force_N",
                     "max_wheel_lateral_force_N")
-FIGURE_KINDS = ("convergence", "pdf", "history", "envelope")
+FIGURE_KINDS = ("utilisation", "convergence", "pdf", "history", "envelope")
 
 #: Every output of :func:`aggregate_study`, relative to its output folder, keyed by the output
 #: names of the rule aggregate_study (workflow/rules/report.smk lists the same paths; the
@@ -64,12 +75,14 @@ STUDY_FILES: dict[str, str] = {
     "extremes": "extremes.parquet",
     "history": "history_statistics.parquet",
     "reliability": "reliability.parquet",
+    "utilisation": "utilisation.parquet",
     "convergence": "convergence.parquet",
     "table1": "table1_std.parquet",
     "table1_history": "table1_history_std.parquet",
     "summary_rst": "summary.rst",
     "summary": "report/summary.html",
     "reliability_html": "report/reliability.html",
+    "utilisation_html": "report/utilisation.html",
     "table1_html": "report/table1_std.html",
     "table1_history_html": "report/table1_history_std.html",
     "configuration": "report/configuration.html",
@@ -193,12 +206,21 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
                                          kind="study_extremes_all", n_files=len(extremes_paths))
 
     section = config.get("limits")
-    limits, context = limits_from_config(section)
+    raw_limits, context = limits_from_config(section)
+    indices = assessed_indices(extremes.columns, _assessment_metadata(extremes_paths))
+    limits = utilisation.assessed_limits(indices)
+    if limits:   # the raw-peak thresholds stay in the table, marked as such
+        raw_limits = [replace(lim, category="raw") for lim in raw_limits]
+    limits = limits + raw_limits
     reliability = ReliabilitySettings.from_config(section)
     table = assess_limits(extremes, limits, context, reliability)
     written["reliability"] = io.write_table(table, paths["reliability"], config=config,
                                             kind="study_reliability")
-    evaluable = table[~table["status"].str.startswith("not evaluated")]
+    util = utilisation.utilisation_table(extremes, indices, table)
+    written["utilisation"] = io.write_table(util, paths["utilisation"], config=config,
+                                            kind="study_utilisation")
+    evaluable = table[~table["status"].str.startswith("not evaluated")
+                      & (table["category"] != "raw")]
     by_name = {lim.name: lim for lim in limits}
     curves: dict[str, list[pd.DataFrame]] = {}
     for scenario, block in evaluable.groupby("scenario", sort=True):
@@ -235,14 +257,57 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
         log.info("no time-history files: %s, %s and the history figures are not written",
                  STUDY_FILES["history"], STUDY_FILES["table1_history"])
 
-    summary = report_pages.summarize(table, study=study, extremes=extremes, design=design)
+    summary = report_pages.summarize(table, study=study, extremes=extremes, design=design,
+                                     utilisation=util)
     for name, text in report_pages.study_pages(summary, config, table1, t1h).items():
         written[name] = io.write_text(text, paths[name])
 
-    written.update(_figures(extremes, stats, curves, groups, limits, context, out / "figures"))
+    written.update(_figures(extremes, stats, curves, groups, raw_limits, context, out / "figures"))
+    written.update(_utilisation_figures(extremes, indices, out / "figures" / "utilisation"))
     log.info("study aggregated: %d samples, %d scenarios, %d limit rows -> %s", len(extremes),
              extremes["scenario"].nunique(), len(table), out)
     return written
+
+
+def _assessment_metadata(paths: Sequence[str | os.PathLike[str]]) -> list[dict]:
+    """The assessed rows' metadata (clause, category, limit source) of the batches' provenance
+    (:func:`ttbpipe.study.batch.simulate_batch` keeps it there): the first batch that has it."""
+    for path in paths:
+        meta = io.read_provenance(path).get("assessment")
+        if meta:
+            return list(meta)
+    return []
+
+
+def _utilisation_figures(extremes, indices, folder: Path) -> dict[str, Path]:
+    import matplotlib.pyplot as plt
+
+    written: dict[str, Path] = {}
+    for section in utilisation.sections_present(indices):
+        fig = utilisation.plot_section(extremes, indices, section)
+        name = utilisation.figure_name(section)
+        written[f"utilisation_{name}"] = io.save_figure(fig, folder / f"{name}.png")
+        plt.close(fig)
+    return written
+
+
+def _distinct_curves(curves: list[pd.DataFrame]) -> list[pd.DataFrame]:
+    """The convergence curves worth a panel: every limit with an exceeding sample, and one panel
+    for all limits without any (their estimate is 0 and their upper bound depends only on the
+    number and weights of the samples, so their panels would be identical). None for a scenario
+    of one sample (nothing converges)."""
+    if not curves or len(curves[0]) < 2:
+        return []
+    hit = [c for c in curves if (c["n_exceed"] > 0).any()]
+    zero = [c for c in curves if not (c["n_exceed"] > 0).any()]
+    if zero:
+        shared = zero[0].copy()
+        shared.attrs = {**zero[0].attrs, "limit": "no_exceedance",
+                        "description": (f"any of the {len(zero)} limits without an exceeding "
+                                        "sample" if len(zero) > 1 else zero[0].attrs["description"]),
+                        "threshold": "its limit" if len(zero) > 1 else zero[0].attrs["threshold"]}
+        hit.append(shared)
+    return hit
 
 
 def _clear(folder: Path) -> None:
@@ -280,7 +345,10 @@ def _figures(extremes, stats, curves, groups, limits, context, root: Path) -> di
     thresholds = {lim.column: lim.threshold for lim in limits
                   if getattr(lim, "threshold", None) is not None and lim.category == "limit"}
     for scenario, cs in curves.items():
-        fig = plots.plot_exceedance_convergence(cs, ncols=3)
+        cs = _distinct_curves(cs)
+        if not cs:
+            continue
+        fig = plots.plot_exceedance_convergence(cs, ncols=min(3, len(cs)))
         written[f"convergence_{scenario}"] = io.save_figure(fig, root / "convergence" / f"{scenario}.png")
         plt.close(fig)
     for group, scenarios in groups.items():

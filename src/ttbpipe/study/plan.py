@@ -147,6 +147,7 @@ def batch_ranges(counts: Mapping[str, int], batch_size: int) -> list[tuple[str, 
 def batch_settings(config: Mapping[str, Any], kind: str, code_version: str) -> dict[str, Any]:
     """Everything a batch's results depend on besides its design rows (and, for the
     irregularity and forecast scenarios, the TIPM profile files, which are inputs)."""
+    from ..assessment.study import resolve_assessment
     from .samples import resolve_simulation
 
     simulation = resolve_simulation(config.get("simulation"))
@@ -155,6 +156,7 @@ def batch_settings(config: Mapping[str, Any], kind: str, code_version: str) -> d
         "structure": copy.deepcopy(config.get("structure") or {}),
         "seed": int(config["study"]["seed"]),
         "code_version": str(code_version),
+        "assessment": resolve_assessment(config.get("assessment")),
     }
     if kind in FIELD_KINDS:
         settings["fields"] = copy.deepcopy(config.get("fields"))

@@ -31,6 +31,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
+from ..assessment.columns import display_name
 from ..io import jsonable, write_text
 
 #: Report category that holds the full summary (the main page points there).
@@ -63,7 +64,9 @@ class StudySummary:
     insufficient: pd.DataFrame         # limits whose number of samples did not suffice
     insufficient_grades: pd.DataFrame  # the same for the grades
     samples_needed: int | None  # largest effective sample size the criterion asks for
-    upper_bounds: pd.Series    # per scenario: largest one-sided upper bound of P over the limits
+    upper_bounds: pd.Series    # per scenario: largest upper end of the P intervals over the limits
+    utilisation: pd.DataFrame  # ttbpipe.study.utilisation.utilisation_table (empty without)
+    margins: pd.DataFrame      # its governing scenario per index (utilisation.margins)
 
     @property
     def exceeded_by_probability(self) -> pd.DataFrame:
@@ -88,10 +91,18 @@ class StudySummary:
 
 def summarize(assessment: pd.DataFrame, *, study: str | None = None,
               extremes: pd.DataFrame | None = None,
-              design: pd.DataFrame | None = None) -> StudySummary:
-    """The :class:`StudySummary` of an :func:`~ttbpipe.stats.reliability.assess_limits` table."""
+              design: pd.DataFrame | None = None,
+              utilisation: pd.DataFrame | None = None) -> StudySummary:
+    """The :class:`StudySummary` of an :func:`~ttbpipe.stats.reliability.assess_limits` table
+    (its rows of category ``raw``, raw-peak thresholds beside the assessed limits, are listed on
+    the reliability page only) and of the study's utilisation table."""
+    from .utilisation import TABLE_COLUMNS, margins
+
     if assessment.empty:
         raise ValueError("empty assessment: no scenario or no limit")
+    full = assessment
+    if "category" in assessment:
+        assessment = assessment[assessment["category"] != "raw"]
     not_evaluated = assessment["status"].str.startswith("not evaluated").astype(bool)
     evaluated = assessment[~not_evaluated]
     category = (evaluated["category"] if "category" in evaluated
@@ -105,8 +116,10 @@ def summarize(assessment: pd.DataFrame, *, study: str | None = None,
     level = float(evaluated["confidence_level"].iloc[0]) if len(evaluated) else 0.95
     insufficient = limits[~limits["sufficient"].astype(bool)]
     need = insufficient["status"].str.extract(r"about (\d+) effective samples")[0].dropna()
+    if utilisation is None:
+        utilisation = pd.DataFrame(columns=list(TABLE_COLUMNS))
     return StudySummary(
-        study=study, assessment=assessment, evaluated=evaluated, limits=limits, grades=grades,
+        study=study, assessment=full, evaluated=evaluated, limits=limits, grades=grades,
         skipped=assessment[not_evaluated],
         scenarios=_scenarios(evaluated, extremes, design),
         confidence=f"{100 * level:g} %",
@@ -115,7 +128,9 @@ def summarize(assessment: pd.DataFrame, *, study: str | None = None,
         insufficient=insufficient,
         insufficient_grades=grades[~grades["sufficient"].astype(bool)],
         samples_needed=int(need.astype(int).max()) if len(need) else None,
-        upper_bounds=limits.groupby("scenario")["upper_one_sided"].max())
+        upper_bounds=limits.groupby("scenario")["ci_high"].max() if "ci_high" in limits
+        else pd.Series(dtype=float),
+        utilisation=utilisation, margins=margins(utilisation))
 
 
 def _scenarios(evaluated: pd.DataFrame, extremes: pd.DataFrame | None,
@@ -183,6 +198,78 @@ def _sufficiency_text(summary: StudySummary, separator: str = ": ") -> str:
                f"about {need} effective samples per scenario") + ".")
 
 
+def _quantity_text(value: float, unit: str) -> str:
+    """A limit or value in the unit an engineer reads it in (kN, mm, m/s^2)."""
+    if not np.isfinite(value):
+        return "n/a"
+    scale, shown = {"N": (1e-3, " kN"), "m": (1e3, " mm"), "m/s^2": (1.0, " m/s²")}.get(
+        unit, (1.0, ""))
+    return f"{value * scale:.3g}{shown}"
+
+
+def limit_text(row) -> str:
+    """The limit of a utilisation row: one value, or the range over the samples."""
+    lo, hi = row["limit_low"], row["limit_high"]
+    if not np.isfinite(lo):
+        return "n/a"
+    if np.isclose(lo, hi, rtol=1e-6):
+        return _quantity_text(lo, row["unit"])
+    return f"{_quantity_text(lo, row['unit'])} - {_quantity_text(hi, row['unit'])}"
+
+
+def _p_cell(row) -> str:
+    if not np.isfinite(row.get("probability", np.nan)):
+        return "n/a"
+    return f"{probability_text(row['probability'])} {_ci(row)}"
+
+
+def margins_rst(summary: StudySummary) -> str:
+    """'Margins to the limits': one row per assessed index in the scenario where it came
+    closest to its limit (utilisation = processed index / limit)."""
+    m = summary.margins
+    if m.empty:
+        return ""
+    level = summary.confidence
+    method = next((str(x) for x in m["method"] if isinstance(x, str)), summary.method)
+    worst = m.loc[m["max_utilisation"].idxmax()]
+    heading = "Margins to the limits"
+    out = [heading, "-" * len(heading), "",
+           f"Utilisation = index processed as its standard prescribes / its limit (1 = at the "
+           f"limit), in the scenario where each index came closest to its limit; median and 95 "
+           f"% over the samples (weighted), the largest with the sample that reached it; "
+           f"P(utilisation > 1) with its two-sided {level} interval ({method}). "
+           f"**Largest utilisation: {worst['max_utilisation']:.3g}**, "
+           f"{_escape(display_name(worst['index']))}, {_escape(worst['standard'])} (scenario "
+           f"``{worst['scenario']}``, sample {int(worst['max_sample_index'])}). "
+           "Per scenario: *utilisation* page; figures: category *1. Margins to the limits*.", ""]
+    rows = []
+    for _, r in m.iterrows():
+        grade = " (grade)" if r["category"] == "grade" else ""
+        rows.append([_escape(r["section"]),
+                     f"{_escape(display_name(r['index']))} ({_escape(r['standard'])}){grade}",
+                     limit_text(r), f"{r['median_utilisation']:.3f}", f"{r['p95_utilisation']:.3f}",
+                     f"**{r['max_utilisation']:.3f}** (``{r['scenario']}`` #{int(r['max_sample_index'])})",
+                     _p_cell(r)])
+    out.append(_list_table(["Section", "Index (standard)", "Limit", "Median", "95 %",
+                            "Max (scenario #sample)", f"P(util. > 1) [{level}]"], rows,
+                           [12, 30, 12, 8, 8, 16, 16]))
+    return "\n".join(out) + "\n"
+
+
+def utilisation_html(summary: StudySummary) -> str:
+    """``report/utilisation.html``: the utilisation statistics per scenario and assessed index."""
+    u = summary.utilisation
+    shown = u.assign(limit=[limit_text(r) for _, r in u.iterrows()],
+                     P_utilisation_gt_1=[_p_cell(r) for _, r in u.iterrows()])[
+        ["scenario", "section", "profile", "index", "clause", "category", "limit", "n_samples",
+         "median_utilisation", "p95_utilisation", "max_utilisation", "max_sample_index",
+         "max_value", "P_utilisation_gt_1", "method", "status", "limit_source"]] if len(u) else u
+    return table_html(shown, "Utilisation of the limits per scenario and index",
+                      "utilisation = processed index / limit (docs/assessment.md); weighted median "
+                      "and 95th percentile over the samples; max_value in SI units (index name); "
+                      f"P(utilisation > 1) with its two-sided {summary.confidence} interval.")
+
+
 # --- summary pages ------------------------------------------------------------------------------
 
 def intro_rst(summary: StudySummary) -> str:
@@ -191,7 +278,8 @@ def intro_rst(summary: StudySummary) -> str:
              for scenario, row in summary.scenarios.iterrows()]
     return (f"Study ``{summary.study}``: {summary.n_runs} coupled train-track-bridge runs in "
             f"{len(summary.scenarios)} scenarios: " + ", ".join(parts) + ". "
-            "P(max index > limit) per scenario with two-sided confidence intervals "
+            "Each sample is assessed as the standards prescribe (docs/assessment.md); "
+            "P(index > limit) per scenario with two-sided confidence intervals "
             "(TIPM-weighted scenarios use an effective sample size); method: "
             "docs/reliability.md, study design: docs/studies.md.")
 
@@ -203,9 +291,9 @@ def main_page_rst(summary: StudySummary, *, details: str = SUMMARY_CATEGORY) -> 
     exceeded = summary.exceeded_by_probability
     if exceeded.empty:
         out.append(f"**Limits exceeded: none.** No sample of any scenario exceeded any of the "
-                   f"{summary.n_limits} safety and comfort limits (one-sided {level} "
-                   "upper bounds of P(exceed): " + ", ".join(
-                       f"{s} < {probability_text(b)}" for s, b in summary.upper_bounds.items())
+                   f"{summary.n_limits} safety and comfort limits ({level} intervals of "
+                   "P(exceed) reach at most: " + ", ".join(
+                       f"{s} {probability_text(b)}" for s, b in summary.upper_bounds.items())
                    + ").")
     else:
         out.append(f"**Limits exceeded** (P(max index > limit), {level} CI):")
@@ -214,6 +302,23 @@ def main_page_rst(summary: StudySummary, *, details: str = SUMMARY_CATEGORY) -> 
             out.append(f"- **{_escape(r['description'])} > {_escape(r['threshold'])}**, scenario "
                        f"``{r['scenario']}``: P = {probability_text(r['probability'])} {_ci(r)} "
                        f"({int(r['n_exceed'])} of {int(r['n_samples'])})")
+    if not summary.margins.empty:
+        m = summary.margins
+        w = m.loc[m["max_utilisation"].idxmax()]
+        out += ["", f"**Largest utilisation {w['max_utilisation']:.3g}** (index / limit): "
+                f"{_escape(display_name(w['index']))} ({_escape(w['standard'])}), limit "
+                f"{limit_text(w)}, scenario "
+                f"``{w['scenario']}`` sample {int(w['max_sample_index'])}. Closest to its limit "
+                f"in each section (every index: *{details}*, *Margins to the limits*):", ""]
+        rows = []
+        for section, block in m.groupby("section", sort=False):
+            r = block.loc[block["max_utilisation"].idxmax()]
+            rows.append([_escape(section), f"{_escape(display_name(r['index']))} "
+                         f"({_escape(r['standard'])})", limit_text(r),
+                         f"{r['p95_utilisation']:.3f}", f"**{r['max_utilisation']:.3f}**",
+                         _p_cell(r)])
+        out.append(_list_table(["Section", "Index", "Limit", "Utilisation, 95 %",
+                                "Utilisation, max", f"P(util. > 1) [{level}]"], rows))
     out.append("")
     verdict = "Yes" if summary.insufficient.empty else "No"
     out.append(f"**Did the samples suffice? {verdict}**, {_sufficiency_text(summary)}")
@@ -229,6 +334,9 @@ def compact_page_rst(summary: StudySummary, *, intro: str,
     level = summary.confidence
     title = f"Reliability summary: {summary.study}"
     out = [title, "=" * len(title), "", intro, ""]
+    margins = margins_rst(summary)
+    if margins:
+        out += [margins, ""]
     out += ["Limits exceeded", "-" * 15, ""]
     exceeded = summary.exceeded_by_probability
     if exceeded.empty:
@@ -238,8 +346,22 @@ def compact_page_rst(summary: StudySummary, *, intro: str,
         out.append(f"- **{_escape(r['description'])} > {_escape(r['threshold'])}**, scenario "
                    f"``{r['scenario']}``: P = {probability_text(r['probability'])}, {level} CI "
                    f"{_ci(r)} ({int(r['n_exceed'])} of {int(r['n_samples'])} samples)")
+    if not margins:   # results without assessed indices: the limit x scenario matrix
+        out += _matrix_rst(summary)
+    out += ["", "Did the number of samples suffice?", "-" * 34, ""]
+    verdict = "**Yes**," if summary.insufficient.empty else "**No**"
+    out.append(f"{verdict} {_sufficiency_text(summary, '; ')}")
+    if len(summary.skipped):
+        out += ["", f"Not evaluated: {', '.join(sorted(summary.skipped['limit'].unique()))} (see "
+                "the full summary)."]
+    out += ["", f"Grades, sources and verdicts per limit: *{details}*."]
+    return "\n".join(out) + "\n"
+
+
+def _matrix_rst(summary: StudySummary) -> list[str]:
+    level = summary.confidence
     heading = f"P(exceed) per limit and scenario ({level} CI)"
-    out += ["", heading, "-" * len(heading), ""]
+    out = ["", heading, "-" * len(heading), ""]
     scenarios = summary.limit_scenarios
     out += [".. list-table::", "   :header-rows: 1", "",
             "   * - limit"] + [f"     - {s}" for s in scenarios]
@@ -252,20 +374,10 @@ def compact_page_rst(summary: StudySummary, *, intro: str,
                 out.append("     - n/a")
                 continue
             r = by.loc[s]
-            cell = (f"0 (< {probability_text(r['upper_one_sided'])})" if r["n_exceed"] == 0
-                    else f"{probability_text(r['probability'])} {_ci(r)}")
             mark = "" if r["sufficient"] else " \\*"
-            out.append(f"     - {cell}{mark}")
-    out += ["", "0 (< u): no exceeding sample, one-sided upper bound u. "
-            "\\* the number of samples did not suffice.", ""]
-    out += ["Did the number of samples suffice?", "-" * 34, ""]
-    verdict = "**Yes**," if summary.insufficient.empty else "**No**"
-    out.append(f"{verdict} {_sufficiency_text(summary, '; ')}")
-    if len(summary.skipped):
-        out += ["", f"Not evaluated: {', '.join(sorted(summary.skipped['limit'].unique()))} (see "
-                "the full summary)."]
-    out += ["", f"Grades, sources and verdicts per limit: *{details}*."]
-    return "\n".join(out) + "\n"
+            out.append(f"     - {probability_text(r['probability'])} {_ci(r)}{mark}")
+    out += ["", "\\* the number of samples did not suffice.", ""]
+    return out
 
 
 def _exceedance_line(r, pct: str) -> str:
@@ -441,6 +553,7 @@ def study_pages(summary: StudySummary, config: Mapping[str, Any], table1: pd.Dat
     (``table1_history_html`` only with the time-history table)."""
     pages = {"summary_rst": main_page_rst(summary), "summary": summary_html(summary),
              "reliability_html": reliability_html(summary.assessment),
+             "utilisation_html": utilisation_html(summary),
              "table1_html": table1_html(table1)}
     if table1_history is not None:
         pages["table1_history_html"] = table1_history_html(table1_history)

@@ -32,6 +32,9 @@ log = logging.getLogger(__name__)
 #: Defaults of the ``simulation:`` section: the study schema's (its only home).
 SIMULATION_DEFAULTS: dict[str, Any] = section_defaults("simulation")
 
+#: Key of the assessed rows' metadata in run_sample's extremes dict (not a table column).
+ASSESSMENT_ROWS_KEY = "_assessment_rows"
+
 PROFILE_CHANNELS = ("vertical_mm", "alignment_mm", "cross_level_mm", "gauge_mm")
 
 
@@ -195,6 +198,7 @@ def extremes_from_run(summary: Mapping[str, Any]) -> dict[str, float]:
     out: dict[str, float] = {
         "train_speed_m_s": float(summary["speed_kmh"]) / 3.6,
         "static_wheel_load_N": float(min(min(v) for v in summary["static_wheel_load_N"].values())),
+        "static_axle_load_N": float(min(sum(v) for v in summary["static_wheel_load_N"].values())),
     }
     for name in RESPONSE_INDICES:
         if name in summary:
@@ -265,12 +269,21 @@ def history_from_run(table: pd.DataFrame, sim: Mapping[str, Any], n_spans: int) 
 @pinned
 def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any],
                structure: Mapping[str, Any], fields: Mapping[str, Any] | None,
-               profiles: Mapping[str, str]) -> tuple[dict[str, Any], pd.DataFrame]:
+               profiles: Mapping[str, str], assessment: Mapping[str, Any] | None = None
+               ) -> tuple[dict[str, Any], pd.DataFrame]:
     """Simulate one design row; returns (extremes row, history block) with the key columns.
 
     ``profiles``: {"irregularity": representative profiles path, "forecast": forecast profiles
-    path} (only the one the row's kind needs).
+    path} (only the one the row's kind needs). ``assessment``: the resolved ``assessment:``
+    section (:func:`ttbpipe.assessment.study.resolve_assessment`; None: its defaults): the
+    sample is assessed in memory and the extremes row gets the assessed columns
+    (:mod:`ttbpipe.assessment.columns`) and, under :data:`ASSESSMENT_ROWS_KEY`, the rows'
+    metadata (the batch moves it to its provenance).
     """
+    from ..assessment.study import assess_sample, resolve_assessment, run_case
+
+    if assessment is None:
+        assessment = resolve_assessment(None)
     kind, index = str(row["kind"]), int(row["sample_index"])
     irr_cfg = sim["irregularity"]
     track, factors = None, None
@@ -295,7 +308,7 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
             raise ValueError("scenario fields needs the fields: section of the configuration")
         factors = field_factors(fields, structure, study_seed, str(row["condition"]), index,
                                 method="mc" if kind == "fields_mc" else None)
-    case = build_case(sim, structure, irregularity=irregularity)
+    case = run_case(build_case(sim, structure, irregularity=irregularity), assessment)
     from ..simulation.coupled import run_coupled
 
     try:
@@ -311,6 +324,16 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
     keys = {"sample_index": index, "scenario": str(row["scenario"]), "weight": float(row["weight"]),
             "seed_entropy": str(row["seed_entropy"])}
     extremes = {**keys, **extremes_from_run(summary)}
+    try:
+        assessed, metadata = assess_sample(table, summary, case, assessment)
+    except Exception as exc:
+        raise RuntimeError(
+            f"sample ({row['scenario']}, {index}): assessment {assessment['standard']} failed: "
+            f"{exc}. The standards evaluate records of at least a few seconds: lengthen the run "
+            "(simulation.end_x_m, structure.layout), or select fewer standards "
+            "(assessment.standard; [] assesses nothing)") from exc
+    extremes.update(assessed)
+    extremes[ASSESSMENT_ROWS_KEY] = metadata
     history = history_from_run(table, sim, n_spans)
     for k in ("weight", "scenario", "sample_index"):   # history key columns (results_schema.md)
         history.insert(0, k, keys[k])

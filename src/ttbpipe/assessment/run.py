@@ -1,0 +1,176 @@
+"""A coupled run as the profiles read it: histories by wheel, wheelset, car and span.
+
+The time-history table of ``ttbpipe simulate`` (docs/vehicle.md section 6, docs/structure.md
+section 6; :mod:`ttbpipe.simulation.outputs`) has ``time_s`` and ``x_lead_m``, then per wheel
+``carC_wsJ_{left,right}_{P_N,Q_N,in_contact,QP,unloading}``, per wheelset ``carC_wsJ_H_N``, per
+car ``carC_body_{front,centre,rear}_{az,ay}_m_s2`` and the structure monitors by name
+(``girder_spanS_mid_z_acc_m_s2``, ...). P is the vertical and Q the lateral force of the rail on
+the wheel (+ left), H = Q_left + Q_right. The summary (the provenance's ``summary``) holds the raw
+indices by their registry names (:mod:`ttbpipe.response_indices`), the train speed
+``speed_kmh`` and the static wheel loads ``static_wheel_load_N`` {wheelset: [left, right]}.
+
+:class:`RunData` parses these once: the profiles then index arrays, not column names. The
+column patterns below are the table's documented format; nothing here recomputes the run.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from .processing import sample_interval
+
+SIDES = ("left", "right")
+_BODY = re.compile(r"^car(\d+)_body_(front|centre|rear)_(az|ay)_m_s2$")
+_GIRDER = re.compile(r"^girder_span(\d+)_mid_z_(acc_m_s2|disp_mm)$")
+
+
+@dataclass
+class RunData:
+    """The histories and facts of one run the profiles need (SI units)."""
+
+    table: pd.DataFrame
+    summary: Mapping[str, Any]
+    config: Mapping[str, Any] | None = None
+    wheelsets: list[str] = field(init=False)
+
+    def __post_init__(self):
+        if "time_s" not in self.table.columns:
+            raise ValueError("the history table has no time_s column (not a ttbpipe simulate "
+                             "result?)")
+        loads = self.summary.get("static_wheel_load_N")
+        if not isinstance(loads, Mapping) or not loads:
+            raise ValueError("the summary has no static_wheel_load_N {wheelset: [left, right]} "
+                             "(a coupled run's summary carries it)")
+        self.wheelsets = list(loads)
+        missing = [f"{ws}_{s}_{q}" for ws in self.wheelsets for s in SIDES for q in ("P_N", "Q_N")
+                   if f"{ws}_{s}_{q}" not in self.table.columns]
+        if missing:
+            raise ValueError(f"the history table lacks wheel force columns {missing[:4]}"
+                             f"{' ...' if len(missing) > 4 else ''}")
+        if "speed_kmh" not in self.summary:
+            raise ValueError("the summary has no speed_kmh")
+
+    # -- facts of the run ---------------------------------------------------------------
+    @cached_property
+    def dt_s(self) -> float:
+        """Output interval of the histories."""
+        return sample_interval(self.table["time_s"].to_numpy(float))
+
+    @property
+    def speed_m_s(self) -> float:
+        return float(self.summary["speed_kmh"]) / 3.6
+
+    @property
+    def speed_kmh(self) -> float:
+        return float(self.summary["speed_kmh"])
+
+    @cached_property
+    def x_m(self) -> np.ndarray:
+        """Position axis of the histories: the leading wheelset's x (m), from x_lead_m, else V t.
+        Every wheel is at a constant offset from it, so windows along it are windows along the
+        track for every wheel."""
+        if "x_lead_m" in self.table.columns:
+            return self.table["x_lead_m"].to_numpy(float)
+        return self.speed_m_s * self.table["time_s"].to_numpy(float)
+
+    @cached_property
+    def static_wheel_load_N(self) -> np.ndarray:
+        """(n_wheelsets, 2) static wheel loads P0 = Q0 (left, right) of the static equilibrium."""
+        return np.array([self.summary["static_wheel_load_N"][ws] for ws in self.wheelsets],
+                        dtype=float)
+
+    def raw(self, name: str) -> float:
+        """A raw index of the summary by its registry name (NaN when the run has none)."""
+        value = self.summary.get(name)
+        return float(value) if isinstance(value, (int, float)) else float("nan")
+
+    # -- histories ----------------------------------------------------------------------
+    def _columns(self, names: list[str]) -> np.ndarray:
+        return self.table[names].to_numpy(float)
+
+    @cached_property
+    def wheel_labels(self) -> list[str]:
+        """'carC_wsJ_left', ... in the column order of :attr:`P_N`."""
+        return [f"{ws}_{s}" for ws in self.wheelsets for s in SIDES]
+
+    @cached_property
+    def P_N(self) -> np.ndarray:
+        """(n, n_wheels) vertical wheel-rail forces, wheels as :attr:`wheel_labels`."""
+        return self._columns([f"{w}_P_N" for w in self.wheel_labels])
+
+    @cached_property
+    def Q_N(self) -> np.ndarray:
+        """(n, n_wheels) lateral wheel-rail forces (+ left)."""
+        return self._columns([f"{w}_Q_N" for w in self.wheel_labels])
+
+    @cached_property
+    def in_contact(self) -> np.ndarray:
+        """(n, n_wheels) bool: the wheel is on the rail (all True for tables without the flag)."""
+        names = [f"{w}_in_contact" for w in self.wheel_labels]
+        if all(n in self.table.columns for n in names):
+            return self._columns(names) > 0.5
+        return np.ones(self.P_N.shape, dtype=bool)
+
+    @cached_property
+    def wheel_static_N(self) -> np.ndarray:
+        """(n_wheels,) static loads in the order of :attr:`wheel_labels`."""
+        return self.static_wheel_load_N.reshape(-1)
+
+    @cached_property
+    def wheel_side_sign(self) -> np.ndarray:
+        """(n_wheels,) +1 for right wheels, -1 for left: sign x Q is positive when the rail pushes
+        the wheel's flange away from its rail (flange-climbing sense; Q is + left)."""
+        return np.tile([-1.0, 1.0], len(self.wheelsets))
+
+    @cached_property
+    def H_N(self) -> np.ndarray:
+        """(n, n_wheelsets) lateral wheelset forces H = Q_left + Q_right (sum Y)."""
+        names = [f"{ws}_H_N" for ws in self.wheelsets]
+        if all(n in self.table.columns for n in names):
+            return self._columns(names)
+        q = self.Q_N
+        return q[:, 0::2] + q[:, 1::2]
+
+    @cached_property
+    def carbody_columns(self) -> dict[tuple[int, str, str], str]:
+        """{(car, point, 'az' | 'ay'): column} of the car-body floor accelerations."""
+        out = {}
+        for c in self.table.columns:
+            m = _BODY.match(c)
+            if m:
+                out[(int(m.group(1)), m.group(2), m.group(3))] = c
+        return dict(sorted(out.items()))
+
+    def carbody(self, axis: str) -> tuple[list[str], np.ndarray]:
+        """(labels 'carC_point', (n, k) accelerations) along 'az' (vertical) or 'ay' (lateral)."""
+        keys = [k for k in self.carbody_columns if k[2] == axis]
+        if not keys:
+            raise ValueError(f"the history table has no car-body {axis} columns "
+                             "(carC_body_<point>_{az,ay}_m_s2)")
+        labels = [f"car{c}_{p}" for c, p, _ in keys]
+        return labels, self._columns([self.carbody_columns[k] for k in keys])
+
+    def girder(self, quantity: str) -> dict[int, np.ndarray]:
+        """{span (1-based): midspan vertical history at the girder's shear centre} for 'acc_m_s2'
+        or 'disp_mm'."""
+        out = {}
+        for c in self.table.columns:
+            m = _GIRDER.match(c)
+            if m and m.group(2) == quantity:
+                out[int(m.group(1))] = self.table[c].to_numpy(float)
+        return dict(sorted(out.items()))
+
+    def deck_acceleration(self) -> dict[int, list[np.ndarray]]:
+        """{span (1-based): midspan vertical deck accelerations}: under each rail at the deck
+        surface where the run recorded it, else at the shear centre
+        (:func:`ttbpipe.structure.monitors.deck_columns`)."""
+        from ..structure.monitors import deck_columns
+
+        return {s: [self.table[c].to_numpy(float) for c in cols]
+                for s, cols in deck_columns(self.table.columns, "z").items()}
