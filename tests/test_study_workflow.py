@@ -100,9 +100,22 @@ def _interrupted_run(workdir: Path, env: dict) -> tuple[Path, dict[str, int]]:
         if proc.poll() is not None:
             pytest.fail("snakemake ended before the first batch:\n" + "".join(output)[-3000:])
         time.sleep(0.02)
-    os.killpg(proc.pid, signal.SIGINT)
+    seen = time.strftime("%H:%M:%S")
+    # Snakemake turns SIGINT into its orderly stop only while it waits in its scheduling loop;
+    # right after a job's end it is busy starting the next ones, so let it settle first and
+    # repeat the signal until it stops (a batch takes several seconds: the run is still going)
+    time.sleep(1.0)
+    for _ in range(10):
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            proc.wait(timeout=3)
+            break
+        except subprocess.TimeoutExpired:
+            continue
     proc.wait(timeout=60)
     if (workdir / "results" / "study" / "extremes.parquet").exists():
+        print(f"{workdir.name}: batch registered at {seen}; the run finished despite SIGINT:\n"
+              + "".join(output)[-2500:])
         return None
     batches = next(root.glob("*/C3"))
     # a batch whose job Snakemake had not seen finish is marked incomplete and redone, rightly
