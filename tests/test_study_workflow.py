@@ -65,12 +65,21 @@ def _incomplete(workdir: Path) -> set[str]:
     return _recorded(workdir, "incomplete")
 
 
+def _default_sigint() -> None:
+    """In the child before exec: SIGINT unblocked and at its default action. A test process can
+    inherit SIGINT ignored or blocked (by the test runner or an earlier test's library), and a
+    child inherits both, so that Ctrl-C, and this file's SIGINT, would not reach Snakemake."""
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(cmd: list[str], cwd: Path, env: dict) -> tuple[subprocess.Popen, list[str]]:
     """Start Snakemake in its own process group; a thread collects its output lines."""
     import threading
 
     proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True,
+                            preexec_fn=_default_sigint)
     output: list[str] = []
     threading.Thread(target=lambda: output.extend(iter(proc.stdout.readline, "")),
                      daemon=True).start()
@@ -114,7 +123,9 @@ def _interrupted_run(workdir: Path, env: dict) -> tuple[Path, dict[str, int]]:
             continue
     proc.wait(timeout=60)
     if (workdir / "results" / "study" / "extremes.parquet").exists():
-        print(f"{workdir.name}: batch registered at {seen}; the run finished despite SIGINT:\n"
+        print(f"{workdir.name}: batch registered at {seen}; the run finished despite SIGINT "
+              f"(test process: SIGINT handler {signal.getsignal(signal.SIGINT)}, blocked "
+              f"{signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])}):\n"
               + "".join(output)[-2500:])
         return None
     batches = next(root.glob("*/C3"))
