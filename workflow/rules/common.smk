@@ -4,7 +4,34 @@ import os
 import re
 from pathlib import Path
 
-import ttbpipe
+import sys
+
+try:
+    import ttbpipe
+except ModuleNotFoundError as _exc:
+    if _exc.name != "ttbpipe":
+        raise
+    # this Snakemake runs in a Python where the package is not installed (e.g. a snakemake on
+    # PATH outside the project's environment): use this checkout's src/, and say so
+    _SRC = Path(workflow.basedir) / "src"   # basedir: the folder of the main Snakefile
+    sys.path.insert(0, str(_SRC))
+    # the rules' scripts run in child processes of this Python: they need the same path
+    os.environ["PYTHONPATH"] = os.pathsep.join(
+        p for p in (str(_SRC), os.environ.get("PYTHONPATH", "")) if p)
+    try:
+        import ttbpipe
+    except ModuleNotFoundError as _inner:
+        raise WorkflowError(
+            f"ttbpipe cannot be imported by this Snakemake's Python ({sys.executable}): "
+            f"{_inner}. Install the project in the environment that runs Snakemake "
+            "(pip install -c requirements.lock.txt -e \".[test]\", the README's first "
+            "command) or run `python -m snakemake` with that environment's python") from None
+    from snakemake.logging import logger as _logger
+
+    _logger.warning(
+        f"ttbpipe is not installed in this Snakemake's Python ({sys.executable}); using "
+        f"{_SRC} with that Python's packages, which may not be the locked versions "
+        "(requirements.lock.txt): install with the README's first command for a reproducible run")
 from ttbpipe.configuration import ConfigurationError as _ConfigurationError
 from ttbpipe.configuration import validate_scale_overlays as _validate_scale_overlays
 from ttbpipe.configuration import validate_study_config as _validate_study_config
