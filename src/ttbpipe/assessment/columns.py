@@ -29,8 +29,10 @@ from typing import Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-#: Unit suffixes an index name may end with, longest first (as ttbpipe.stats.schema reads them).
-_SUFFIXES = ("_m_s2", "_N", "_m")
+from ..stats.schema import UNIT_SUFFIXES
+
+#: Unit suffixes an index name may end with, longest first: the results schema's.
+_SUFFIXES = tuple(suffix for suffix, _ in UNIT_SUFFIXES)
 UTILISATION = "utilisation"
 LIMIT = "limit"
 
@@ -134,7 +136,7 @@ class AssessedIndex:
 
 
 def _unit(suffix: str) -> str:
-    return {"_m_s2": "m/s^2", "_N": "N", "_m": "m", "": "1"}[suffix]
+    return dict(UNIT_SUFFIXES).get(suffix, "1")
 
 
 def row_metadata(table: pd.DataFrame) -> list[dict[str, str]]:

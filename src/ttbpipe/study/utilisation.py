@@ -54,12 +54,8 @@ def assessed_limits(indices: Sequence[AssessedIndex]) -> list[ConstantLimit]:
             continue
         source = "; ".join(p for p in (f"{a.standard} {a.clause}".strip(), a.limit_source) if p)
         out.append(ConstantLimit(limit_name(a), a.utilisation, AT_LIMIT, "1", source or a.profile,
-                                 f"{_index_text(a)} ({a.profile})", category=a.category))
+                                 f"{display_name(a.index)} ({a.profile})", category=a.category))
     return out
-
-
-def _index_text(a: AssessedIndex) -> str:
-    return display_name(a.index)
 
 
 def utilisation_table(extremes: pd.DataFrame, indices: Sequence[AssessedIndex],
@@ -147,7 +143,7 @@ def plot_section(extremes: pd.DataFrame, indices: Sequence[AssessedIndex], secti
                        label=f"{scenario} (n = {u.size})" if i == 0 else None)
     ax.axvline(AT_LIMIT, color="k", lw=1.5, ls="--", label="limit (utilisation 1)")
     ax.set_yticks(range(n_idx))
-    ax.set_yticklabels([f"{_index_text(a)}{' (grade)' if a.category == 'grade' else ''}"
+    ax.set_yticklabels([f"{display_name(a.index)}{' (grade)' if a.category == 'grade' else ''}"
                         f"\n{a.standard}" for a in reversed(mine)], fontsize=7)
     ax.set_ylim(-0.6, n_idx - 0.4)
     ax.set_xlim(0.0, max(1.1, 1.05 * largest))
