@@ -15,6 +15,11 @@ own identifiers, never on the batch, the number of samples drawn or the core cou
   :data:`SIMULATION_RESERVED_LABELS`, the seed of the mean-spectrum profile
   ``[seed, 7, crc32("mean_spectrum")]`` and the seed of the plain Monte Carlo fields
   ``[seed, 7, crc32("fields_mc")]`` (:mod:`ttbpipe.study.samples`).
+* :data:`RARE_EVENT` (11): the rare-event estimators of :mod:`ttbpipe.reliability`: plain Monte
+  Carlo point ``i``, ``[seed, 11, 0, i]``; subset simulation level-0 point ``i``,
+  ``[seed, 11, 1, 0, i]``, and the Markov chain seeded by seed point ``c`` at level ``l >= 1``,
+  ``[seed, 11, 1, l, c]``. The seed is the study seed in a study, the caller's seed in
+  :func:`ttbpipe.reliability.estimate_failure_probability`.
 
 **Campaign tree** ``SeedSequence([study.seed, yyyymmdd(date), stream, ...])`` (the campaign date
 as an integer, :func:`ttbpipe.tipm.profiles.date_key`; always > 10000, so never a stage id of the
@@ -69,6 +74,12 @@ SIMULATION_RESERVED_LABELS: tuple[str, ...] = (MEAN_SPECTRUM_LABEL, MC_FIELDS_LA
 #: which other groups are enabled.
 FIELD_GROUPS: Mapping[str, int] = MappingProxyType({"C1": 0, "C2": 1, "C3": 2, "C4": 3})
 
+#: Rare-event estimators (ttbpipe.reliability): Monte Carlo and subset simulation points.
+RARE_EVENT = 11
+#: Word after :data:`RARE_EVENT` naming the estimator.
+RARE_EVENT_MONTE_CARLO = 0
+RARE_EVENT_SUBSET = 1
+
 # --- campaign tree: SeedSequence([study.seed, yyyymmdd(date), stream, ...]) --------------------
 #: Profiles of a campaign's representative PSD sets (ttbpipe.tipm.stages.profiles_stage).
 TIPM_REPRESENTATIVE = 0
@@ -89,7 +100,8 @@ SYNTHETIC_CAMPAIGN = 1
 
 #: The stream ids of each tree (tests/test_streams.py checks they are distinct within a tree).
 TREES: Mapping[str, Mapping[str, int]] = MappingProxyType({
-    "study": MappingProxyType({"FIELDS": FIELDS, "SIMULATION": SIMULATION}),
+    "study": MappingProxyType({"FIELDS": FIELDS, "SIMULATION": SIMULATION,
+                               "RARE_EVENT": RARE_EVENT}),
     "campaign": MappingProxyType({"TIPM_REPRESENTATIVE": TIPM_REPRESENTATIVE,
                                   "TIPM_FORECAST": TIPM_FORECAST,
                                   "TIPM_MONTE_CARLO": TIPM_MONTE_CARLO,

@@ -1,0 +1,44 @@
+"""Rare-event reliability: failure probabilities of limit states in standard-normal space.
+
+Public entry point: :func:`estimate_failure_probability` for any vectorised limit-state
+function ``g`` (points of shape (n, n_dims) in standard-normal space -> values of shape (n,),
+failure where g <= 0). Every estimator returns a :class:`FailureProbability` with the
+probability, its confidence interval, its coefficient of variation and the number of model
+evaluations. Methods: ``"monte_carlo"`` (the reference) and ``"subset"`` (subset simulation,
+Au & Beck 2001); docs/reliability.md, "Rare events".
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+from .monte_carlo import monte_carlo
+from .result import FailureProbability, reliability_index
+from .subset import SubsetSettings, SubsetSimulation, subset_simulation
+
+__all__ = ["estimate_failure_probability", "FailureProbability", "reliability_index",
+           "SubsetSettings", "SubsetSimulation", "METHODS"]
+
+#: Estimators of :func:`estimate_failure_probability` and the function that implements each.
+METHODS: dict[str, Callable[..., FailureProbability]] = {
+    "subset": subset_simulation,
+    "monte_carlo": monte_carlo,
+}
+
+
+def estimate_failure_probability(g: Callable[[np.ndarray], np.ndarray], n_dims: int,
+                                 method: str = "subset", seed: int = 0,
+                                 **options: Any) -> FailureProbability:
+    """``P(g(U) <= 0)`` for ``U ~ N(0, I_n_dims)``.
+
+    ``method="subset"``: options of :class:`SubsetSettings` (``n_per_level``,
+    ``level_probability``, ``max_levels``, ``target_acceptance``, ``initial_scale``,
+    ``confidence_level``). ``method="monte_carlo"``: ``n_samples``, ``batch_size``,
+    ``confidence_level``, ``interval`` (``"wilson"`` or ``"clopper-pearson"``). The result
+    depends only on ``seed``, the method and its options (ttbpipe.streams, RARE_EVENT).
+    """
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {sorted(METHODS)}")
+    return METHODS[method](g, int(n_dims), seed=int(seed), **options)
