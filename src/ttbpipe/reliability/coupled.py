@@ -5,7 +5,7 @@ random inputs are the image of u reaches the limit; g is the utilisation margin,
 the inputs, as subset simulation needs (a clipped or saturated g stalls its thresholds).
 
 The map u -> (irregularity profile, parameter-field factors) is an *inputs* object with
-``n_dims`` and ``inputs(u) -> (profile table, factors or None)``
+``n_dims`` and ``map(u) -> (profile table, factors or None)``
 (:class:`ttbpipe.reliability.inputs.StandardNormalInputs`). Each point is one coupled run
 (:func:`ttbpipe.simulation.coupled.run_coupled`) and depends on u only, so a batch of points can
 be spread over processes in any way without changing a value.
@@ -33,7 +33,7 @@ __all__ = ["InputMap", "CoupledLimitState", "run_point"]
 class InputMap(Protocol):
     n_dims: int
 
-    def inputs(self, u: np.ndarray) -> tuple[pd.DataFrame, Mapping[str, np.ndarray] | None]: ...
+    def map(self, u: np.ndarray) -> tuple[pd.DataFrame, Mapping[str, np.ndarray] | None]: ...
 
 
 @pinned
@@ -44,7 +44,7 @@ def run_point(case: Mapping[str, Any], input_map: InputMap, u: np.ndarray,
     from ..simulation.coupled import run_coupled
     from ..study.samples import extremes_from_run
 
-    track, factors = input_map.inputs(np.asarray(u, dtype=float))
+    track, factors = input_map.map(np.asarray(u, dtype=float))
     track = track.copy()
     # the profile starts lead_in_m behind x = 0, as the study's samples do
     track["chainage_m"] = track["chainage_m"] - track["chainage_m"].iloc[0] - float(lead_in_m)
