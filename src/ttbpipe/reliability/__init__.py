@@ -1,0 +1,1 @@
+"""Reliability of the coupled system in the standard-normal space of its random inputs."""
