@@ -19,8 +19,11 @@ samples). u = 0 gives a zero profile at the median spectral level and the factor
 every marginal -- the mean field for the symmetric (normal) marginals of the paper's case 2.
 
 Dimension of the default study (config/config.yaml: TB/T 3352 at dx 0.25 m over the default
-structure's rails plus the 20 m lead-in, groups C1-C4, KLE 95 %, one field per rail pair):
-printed by ``tests/test_reliability_inputs.py::test_default_study_dimension``.
+structure's rails, -20 to 256.5 m with the 20 m lead-in; groups C1-C4, KLE 95 %, one field
+shared by both rails), as ``tests/test_reliability_inputs.py::test_default_study_dimension``
+prints it: n_dims = 2144 = 4 x 278 irregularity coefficients (139 FFT frequencies in 2-200 m)
++ C1 396 + C2 396 (99 KL coefficients x 4 parameters each) + C3 100 + C4 140. With
+``fields.left_right_correlation`` < 1 the C1 and C2 slices double (2936).
 """
 
 from __future__ import annotations
