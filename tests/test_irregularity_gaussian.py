@@ -88,7 +88,7 @@ def test_welch_psd_of_gaussian_realisations_recovers_the_psd():
         f, p = signal.welch(z, fs=1 / DX, window="hann", nperseg=nper, noverlap=0,
                             detrend=False)
         estimates.append(p)
-    f, g = f, np.mean(estimates, axis=0)
+    g = np.mean(estimates, axis=0)
     inside = (f >= 1 / BAND[1] + 3 / (nper * DX)) & (f <= 1 / BAND[0] - 3 / (nper * DX))
     dof = 2 * k * m
     n_bins = int(inside.sum())
