@@ -14,6 +14,12 @@ girder's dynamic characteristics, so C4 holds the girder's beam properties, as i
 
 Every parameter is a dimensionless multiplicative factor on its nominal value (mean 1 unless
 configured otherwise), carried by the elements or supports of one kind along the line.
+
+The rail (C1) and rail-pad (C2) groups live on both rails. With ``left_right_correlation``
+rho = 1 (default) the two rails share one field (an array of n values, applied to both); with
+rho < 1 each rail has its own field, correlated by rho in the Gaussian (Nataf) space
+(docs/random_fields.md, "Left and right rails"), and the factors are 2n arrays, left rail then
+right rail (ttbpipe.structure.apply_factors).
 """
 
 from __future__ import annotations
@@ -29,6 +35,9 @@ from ..configuration import section_defaults
 
 # Carrier kinds: where along the line each parameter lives.
 CARRIER_KINDS = ("rail_element", "fastener", "slab_element", "girder_element")
+
+#: Carrier kinds present on each rail (a field per rail when left_right_correlation < 1).
+RAIL_CARRIERS = ("rail_element", "fastener")
 
 
 @dataclass(frozen=True)
@@ -122,13 +131,16 @@ class ParameterGroup:
     correlation_length_m: float
     stream: int
     specs: list[dict[str, Any]] = field(default_factory=list)
+    #: Gaussian-space correlation of the left- and right-rail fields (rail carriers only;
+    #: None for slab and girder groups): 1 = one shared field.
+    left_right_correlation: float | None = None
 
 
 def build_groups(fields_config: Mapping[str, Any]) -> list[ParameterGroup]:
     """Configured, enabled groups from the ``fields:`` section (config/config.yaml)."""
     schema_defaults = section_defaults("fields")   # the study schema: their only home
     defaults = {key: fields_config.get(key, schema_defaults[key])
-                for key in ("kernel", "correlation_length_m")}
+                for key in ("kernel", "correlation_length_m", "left_right_correlation")}
     groups = []
     for name, gconf in (fields_config.get("groups") or {}).items():
         if name not in GROUP_DEFINITIONS:
@@ -159,12 +171,24 @@ def build_groups(fields_config: Mapping[str, Any]) -> list[ParameterGroup]:
         if corr.shape != (len(params), len(params)):
             raise ValueError(f"fields.groups.{name}.correlation: shape {corr.shape}, expected "
                              f"{len(params)}x{len(params)} in the order {params}")
+        if definition.carrier in RAIL_CARRIERS:
+            left_right = float(gconf.get("left_right_correlation",
+                                         defaults["left_right_correlation"]))
+            if not -1.0 <= left_right <= 1.0:
+                raise ValueError(f"fields.groups.{name}.left_right_correlation: {left_right}; "
+                                 "expected a correlation in [-1, 1]")
+        elif "left_right_correlation" in gconf:
+            raise ValueError(f"fields.groups.{name}.left_right_correlation: group {name} "
+                             f"({definition.component}) is not on the rails; only the groups on "
+                             f"{RAIL_CARRIERS} carriers have a field per rail")
+        else:
+            left_right = None
         groups.append(ParameterGroup(
             name=name, carrier=definition.carrier, parameters=params, marginals=marginals,
             correlation=corr, kernel=gconf.get("kernel", defaults["kernel"]),
             correlation_length_m=float(gconf.get("correlation_length_m",
                                                  defaults["correlation_length_m"])),
-            stream=GROUP_STREAM[name], specs=specs))
+            stream=GROUP_STREAM[name], specs=specs, left_right_correlation=left_right))
     if not groups:
         raise ValueError("fields.groups: no enabled group; enable at least one of "
                          f"{list(GROUP_DEFINITIONS)}")

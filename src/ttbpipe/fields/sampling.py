@@ -12,6 +12,11 @@ Construction of one group of P parameters on its carriers x_1..x_n (docs/random_
    Cov(G_p(x), G_q(y)) = R_g[p, q] rho(x, y) (separable);
 4. factors X = F_p^-1(Phi(G)) per parameter (eq. 45).
 
+Rail carriers (C1, C2) with ``left_right_correlation`` rho < 1: a second set of normals gives a
+second Gaussian field G2 (same basis, same R_g), and the rails get G_left = G,
+G_right = rho G + sqrt(1 - rho^2) G2 before step 4; the factors are then 2n arrays (left rail,
+then right rail). rho = 1 draws no extra numbers: today's single shared field, bit for bit.
+
 Long lines may be divided into N independent segments (eq. 34, ``segments``).
 
 Determinism: sample i of group g uses numpy.random.default_rng(SeedSequence([study_seed,
@@ -130,6 +135,12 @@ class GroupFieldSampler:
             basis, fraction = cache[key]
             self.segments.append(_Segment(idx, basis, fraction))
         self.n_coefficients = sum(seg.basis.shape[1] for seg in self.segments)
+        rho = group.left_right_correlation
+        #: 2 when each rail has its own field (rail carriers with rho < 1), else 1
+        self.n_rails = 2 if rho is not None and rho < 1.0 else 1
+        self.left_right_correlation = rho
+        #: independent standard normals per parameter of one realisation
+        self.n_normals = self.n_rails * self.n_coefficients
         log.info("group %s (%s, %d carriers, %s, b = %g m, %d segment(s)): %s with %d "
                  "coefficients per parameter%s", group.name, group.carrier,
                  self.positions_m.size, group.kernel, group.correlation_length_m,
@@ -148,10 +159,36 @@ class GroupFieldSampler:
             start += m
         return out
 
+    def factors_from_normals(self, independent_normals: np.ndarray) -> np.ndarray:
+        """Independent standard normals (n_normals, P) -> factors (P, n_rails * n_carriers).
+
+        Rows 0..n_coefficients-1 give the (left-rail or shared) field; with two rails the next
+        n_coefficients rows give the independent part of the right rail's field (module
+        docstring). Pure: the map the rare-event code evaluates.
+        """
+        eta = np.asarray(independent_normals, dtype=float)
+        shape = (self.n_normals, len(self.group.parameters))
+        if eta.shape != shape:
+            raise ValueError(f"group {self.group.name}: normals of shape {eta.shape}, expected "
+                             f"{shape}")
+        m = self.n_coefficients
+        gaussian = self.gaussian_fields(eta[:m])
+        if self.n_rails == 2:
+            rho = float(self.left_right_correlation)
+            right = rho * gaussian + np.sqrt(1.0 - rho * rho) * self.gaussian_fields(eta[m:])
+            gaussian = np.concatenate([gaussian, right])
+        return self.nataf.to_physical(gaussian).T
+
     def sample(self, rng: np.random.Generator) -> np.ndarray:
-        """One realisation: factors (P, n_carriers)."""
+        """One realisation: factors (P, n_rails * n_carriers).
+
+        The shared (or left-rail) normals are drawn first, exactly as for one field, so that
+        rho = 1 reproduces the single shared field and rho < 1 keeps the left rail's field of
+        the same sample and seed."""
         eta = rng.standard_normal((self.n_coefficients, len(self.group.parameters)))
-        return self.nataf.to_physical(self.gaussian_fields(eta)).T
+        if self.n_rails == 2:
+            eta = np.concatenate([eta, rng.standard_normal(eta.shape)])
+        return self.factors_from_normals(eta)
 
 
 def sample_generator(study_seed: int, sample_index: int, stream: int) -> np.random.Generator:
@@ -232,12 +269,15 @@ class FieldSampler:
         return out
 
     def table(self, sample_indices: Iterable[int]) -> pd.DataFrame:
-        """Long table (TABLE_COLUMNS) of the given samples, one row per sample/parameter/carrier."""
+        """Long table (TABLE_COLUMNS) of the given samples, one row per sample/parameter/carrier.
+
+        With a field per rail, carrier_index n..2n-1 are the right rail's carriers at the same
+        x_m as 0..n-1 (the 2n layout ttbpipe.structure.apply_factors reads)."""
         columns: dict[str, list[np.ndarray]] = {c: [] for c in TABLE_COLUMNS}
         for i in sample_indices:
             factors = self.sample(int(i))
             for sampler in self.samplers:
-                x = sampler.positions_m
+                x = np.tile(sampler.positions_m, sampler.n_rails)
                 for name in sampler.group.parameters:
                     columns["sample_index"].append(np.full(x.size, i, dtype=np.int64))
                     columns["parameter"].append(np.full(x.size, name, dtype=object))
@@ -255,6 +295,8 @@ class FieldSampler:
         return {s.group.name: {"carrier": s.group.carrier, "parameters": s.group.parameters,
                                "n_carriers": int(s.positions_m.size),
                                "coefficients_per_parameter": s.n_coefficients,
+                               "rails": s.n_rails,
+                               "left_right_correlation": s.left_right_correlation,
                                "captured_variance": min(seg.captured_fraction
                                                         for seg in s.segments),
                                "gaussian_correlation": s.nataf.gaussian_correlation}

@@ -2,7 +2,10 @@
 
 * :mod:`.spectra`   -- TB/T 3352-2014, German high-speed and FRA spectra behind one interface
   (:func:`get_spectrum`), plus the rad/m <-> 1/m unit helpers;
-* :mod:`.synthesis` -- random profiles from a one-sided PSD by inverse FFT;
+* :mod:`.synthesis` -- random profiles from a one-sided PSD by inverse FFT (random phases, or
+  Gaussian Fourier coefficients from explicit normals);
+* :mod:`.gaussian`  -- Gaussian profiles with a random spectral level as a function of
+  standard normals (:class:`~.gaussian.GaussianIrregularityModel`);
 * :mod:`.psd`       -- Welch PSD estimates per channel and per track section;
 * :mod:`.plots`     -- the PSD-versus-standard figure (imported on demand: matplotlib).
 

@@ -20,6 +20,12 @@ The series repeats with period N·Δx = 1/Δn; N is chosen >= the number of outp
 profile never repeats over its length (physics.md §7.5). The amplitudes are deterministic and
 only the phases are random, so every realisation has the target band variance (the realised
 RMS over a profile shorter than the FFT period differs from it by O(1/sqrt(number of waves))).
+
+``amplitudes="gaussian"`` (:func:`gaussian_channel_from_normals`) replaces the random phases by
+random Fourier coefficients X_k = (N/2)·sqrt(G Δn)·(a_k + i b_k), a_k, b_k ~ N(0, 1): the same
+mean power per frequency, but a stationary Gaussian process whose one-realisation variance is
+random (docs/irregularity.md, "Gaussian representation"). The random-phase form stays the
+default (the seed paper's TIPM synthesis).
 """
 
 from __future__ import annotations
@@ -35,7 +41,8 @@ from ..channels import SPECTRAL_CHANNELS
 from .spectra import TrackSpectrum, get_spectrum
 
 __all__ = ["synthesize_channel", "synthesize_profiles", "synthesize_from_psd_table",
-           "fft_grid", "psd_table_interpolator"]
+           "fft_grid", "psd_table_interpolator", "gaussian_channel_from_normals",
+           "n_gaussian_coefficients", "gaussian_band_frequencies", "AMPLITUDES"]
 
 log = logging.getLogger(__name__)
 
@@ -68,28 +75,13 @@ def _band_mask(frequencies_per_m: np.ndarray, wavelength_band_m: tuple[float, fl
             & (frequencies_per_m <= (1.0 / lam_min) * (1 + 1e-12)))
 
 
-def synthesize_channel(psd_mm2_m: Callable[[np.ndarray], np.ndarray], length_m: float,
-                       dx_m: float, rng: np.random.Generator | int | None,
-                       wavelength_band_m: tuple[float, float] = (2.0, 200.0)) -> np.ndarray:
-    """One random profile in mm, samples at chainage 0, dx, ..., covering ``length_m``.
+def _spectral_grid(length_m: float, dx_m: float, wavelength_band_m: tuple[float, float]
+                   ) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """(output samples, FFT size, FFT frequencies (1/m), in-band mask) of one channel.
 
-    Parameters
-    ----------
-    psd_mm2_m
-        One-sided PSD, ``n (1/m, ndarray) -> G (mm²/(1/m), ndarray)``; called only with
-        frequencies inside ``wavelength_band_m`` (e.g. ``spectrum.as_function(channel)``).
-    length_m, dx_m
-        Profile length and sample spacing in m.
-    rng
-        ``numpy.random.Generator`` (or a seed for ``numpy.random.default_rng``). Exactly
-        N/2 + 1 uniform phases are drawn from it, N = FFT size, whatever the band.
-    wavelength_band_m
-        (shortest, longest) wavelength in m kept; frequencies 1/λmax <= n <= 1/λmin. The
-        shortest wavelength must exceed 2·dx (Nyquist).
-
-    Convention: module docstring (numpy ``irfft``, X_k = (N/2)·sqrt(2 G Δn)·e^{iφ}).
+    The mask excludes the mean and Nyquist bins (module docstring); shared by the random-phase
+    and the Gaussian representations so that both use the same frequencies.
     """
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     n_samples, n_fft = fft_grid(length_m, dx_m)
     if wavelength_band_m[0] <= 2.0 * dx_m:
         raise ValueError(f"shortest wavelength {wavelength_band_m[0]} m must exceed 2·dx = "
@@ -100,27 +92,129 @@ def synthesize_channel(psd_mm2_m: Callable[[np.ndarray], np.ndarray], length_m: 
     if not np.any(in_band):
         raise ValueError(f"no FFT frequency inside the band {wavelength_band_m} m for a "
                          f"{length_m} m profile at dx {dx_m} m; lengthen the profile")
-    phases = rng.uniform(0.0, 2.0 * np.pi, size=frequencies.size)
-    delta_n = 1.0 / (n_fft * dx_m)
-    psd = np.asarray(psd_mm2_m(frequencies[in_band]), dtype=float)
-    if psd.shape != (int(in_band.sum()),) or not np.all(np.isfinite(psd)) or np.any(psd < 0):
+    return n_samples, n_fft, frequencies, in_band
+
+
+def _band_psd(psd_mm2_m: Callable[[np.ndarray], np.ndarray], frequencies: np.ndarray) -> np.ndarray:
+    psd = np.asarray(psd_mm2_m(frequencies), dtype=float)
+    if psd.shape != frequencies.shape or not np.all(np.isfinite(psd)) or np.any(psd < 0):
         raise ValueError("the PSD callable must return finite, non-negative values of the same "
                          "shape as its argument")
+    return psd
+
+
+AMPLITUDES = ("random_phase", "gaussian")
+
+
+def synthesize_channel(psd_mm2_m: Callable[[np.ndarray], np.ndarray], length_m: float,
+                       dx_m: float, rng: np.random.Generator | int | None,
+                       wavelength_band_m: tuple[float, float] = (2.0, 200.0), *,
+                       amplitudes: str = "random_phase") -> np.ndarray:
+    """One random profile in mm, samples at chainage 0, dx, ..., covering ``length_m``.
+
+    Parameters
+    ----------
+    psd_mm2_m
+        One-sided PSD, ``n (1/m, ndarray) -> G (mm²/(1/m), ndarray)``; called only with
+        frequencies inside ``wavelength_band_m`` (e.g. ``spectrum.as_function(channel)``).
+    length_m, dx_m
+        Profile length and sample spacing in m.
+    rng
+        ``numpy.random.Generator`` (or a seed for ``numpy.random.default_rng``). Random phase:
+        exactly N/2 + 1 uniform phases are drawn from it, N = FFT size, whatever the band.
+        Gaussian: exactly :func:`n_gaussian_coefficients` standard normals.
+    wavelength_band_m
+        (shortest, longest) wavelength in m kept; frequencies 1/λmax <= n <= 1/λmin. The
+        shortest wavelength must exceed 2·dx (Nyquist).
+    amplitudes
+        ``"random_phase"`` (default; deterministic amplitudes, the seed paper's method) or
+        ``"gaussian"`` (random Fourier coefficients: a stationary Gaussian profile,
+        :func:`gaussian_channel_from_normals`).
+
+    Convention: module docstring (numpy ``irfft``, X_k = (N/2)·sqrt(2 G Δn)·e^{iφ}).
+    """
+    if amplitudes not in AMPLITUDES:
+        raise ValueError(f"amplitudes: {amplitudes!r}; expected one of {AMPLITUDES}")
+    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    if amplitudes == "gaussian":
+        normals = rng.standard_normal(n_gaussian_coefficients(length_m, dx_m, wavelength_band_m))
+        return gaussian_channel_from_normals(psd_mm2_m, length_m, dx_m, normals,
+                                             wavelength_band_m)
+    n_samples, n_fft, frequencies, in_band = _spectral_grid(length_m, dx_m, wavelength_band_m)
+    phases = rng.uniform(0.0, 2.0 * np.pi, size=frequencies.size)
+    delta_n = 1.0 / (n_fft * dx_m)
+    psd = _band_psd(psd_mm2_m, frequencies[in_band])
     spectrum = np.zeros(frequencies.size, dtype=complex)
     spectrum[in_band] = (0.5 * n_fft) * np.sqrt(2.0 * psd * delta_n) * np.exp(1j * phases[in_band])
     return sp_fft.irfft(spectrum, n_fft)[:n_samples]
 
 
+def gaussian_band_frequencies(length_m: float, dx_m: float,
+                              wavelength_band_m: tuple[float, float] = (2.0, 200.0)) -> np.ndarray:
+    """The FFT frequencies n_k (1/m) inside the band that carry a Gaussian coefficient pair."""
+    _, _, frequencies, in_band = _spectral_grid(length_m, dx_m, wavelength_band_m)
+    return frequencies[in_band]
+
+
+def n_gaussian_coefficients(length_m: float, dx_m: float,
+                            wavelength_band_m: tuple[float, float] = (2.0, 200.0)) -> int:
+    """Standard normals one Gaussian channel needs: 2 per in-band frequency (a_k, b_k)."""
+    return 2 * int(gaussian_band_frequencies(length_m, dx_m, wavelength_band_m).size)
+
+
+def gaussian_channel_from_normals(psd_mm2_m: Callable[[np.ndarray], np.ndarray],
+                                  length_m: float, dx_m: float, normals: np.ndarray,
+                                  wavelength_band_m: tuple[float, float] = (2.0, 200.0)
+                                  ) -> np.ndarray:
+    """Gaussian profile in mm from explicit standard normals (random Fourier coefficients).
+
+    Spectral representation with random amplitudes (Shinozuka & Deodatis 1991, Appl. Mech. Rev.
+    44:191, eq. 40 form with Gaussian coefficients):
+
+        z(x) = Σ_k sqrt(G(n_k)·Δn) · (a_k cos 2π n_k x − b_k sin 2π n_k x),
+        a_k, b_k ~ N(0, 1) independent,
+
+    i.e. X_k = (N/2)·sqrt(G(n_k)·Δn)·(a_k + i b_k) in the numpy ``irfft`` convention of the
+    module docstring. E|X_k|² = (N/2)²·2·G Δn, the random-phase |X_k|² exactly, so both forms
+    have the variance Σ G(n_k)Δn; but here z is a linear map of Gaussian variables, hence a
+    stationary Gaussian process for any number of frequencies, and the variance of one
+    realisation is random (chi-square with 2 degrees of freedom per frequency). The random-phase
+    sum is Gaussian only as the number of frequencies grows (Grigoriu 1993, J. Eng. Mech.
+    119:328): its one-realisation band variance is fixed.
+
+    ``normals``: shape ``(n_gaussian_coefficients(...),)``; the first half are a_k, the second
+    half b_k, both in increasing frequency (:func:`gaussian_band_frequencies`). All zeros give a
+    zero profile. Pure: no random state.
+    """
+    n_samples, n_fft, frequencies, in_band = _spectral_grid(length_m, dx_m, wavelength_band_m)
+    n_band = int(in_band.sum())
+    normals = np.asarray(normals, dtype=float)
+    if normals.shape != (2 * n_band,):
+        raise ValueError(f"normals: shape {normals.shape}, expected ({2 * n_band},) = 2 × "
+                         f"{n_band} in-band frequencies for {length_m} m at dx {dx_m} m, band "
+                         f"{tuple(wavelength_band_m)} m")
+    if not np.all(np.isfinite(normals)):
+        raise ValueError("normals must be finite")
+    delta_n = 1.0 / (n_fft * dx_m)
+    psd = _band_psd(psd_mm2_m, frequencies[in_band])
+    spectrum = np.zeros(frequencies.size, dtype=complex)
+    spectrum[in_band] = ((0.5 * n_fft) * np.sqrt(psd * delta_n)
+                         * (normals[:n_band] + 1j * normals[n_band:]))
+    return sp_fft.irfft(spectrum, n_fft)[:n_samples]
+
+
 def synthesize_profiles(spectrum: TrackSpectrum | str, length_m: float, dx_m: float = 0.25,
                         seed: int | None = None, rng: np.random.Generator | None = None,
-                        wavelength_band_m: tuple[float, float] | None = None) -> pd.DataFrame:
+                        wavelength_band_m: tuple[float, float] | None = None, *,
+                        amplitudes: str = "random_phase") -> pd.DataFrame:
     """Four independent channels of a standard spectrum, as a table.
 
     Columns ``chainage_m, vertical_mm, alignment_mm, cross_level_mm, gauge_mm``; chainage from 0
     to ``length_m`` at ``dx_m``. Randomness: ``rng`` if given, else ``default_rng(seed)``; the
     channels draw from it in the order of :data:`ttbpipe.channels.SPECTRAL_CHANNELS`.
     ``wavelength_band_m=None`` uses the spectrum's valid band (2-200 m for TB/T 3352).
-    Rail inputs: :func:`ttbpipe.channels.rails_from_spectral`.
+    ``amplitudes``: :func:`synthesize_channel`. Rail inputs:
+    :func:`ttbpipe.channels.rails_from_spectral`.
     """
     spectrum = get_spectrum(spectrum) if isinstance(spectrum, str) else spectrum
     if rng is None:
@@ -131,7 +225,7 @@ def synthesize_profiles(spectrum: TrackSpectrum | str, length_m: float, dx_m: fl
     columns: dict[str, np.ndarray] = {}
     for channel in SPECTRAL_CHANNELS:
         columns[f"{channel}_mm"] = synthesize_channel(spectrum.as_function(channel), length_m, dx_m,
-                                                      rng, band)
+                                                      rng, band, amplitudes=amplitudes)
     n_samples = next(iter(columns.values())).size
     return pd.DataFrame({"chainage_m": np.arange(n_samples) * float(dx_m), **columns})
 
@@ -173,15 +267,16 @@ def psd_table_interpolator(spatial_frequency_per_m, psd_mm2_m, *,
 def synthesize_from_psd_table(spatial_frequency_per_m, psd_by_channel: Mapping[str, np.ndarray],
                               length_m: float, dx_m: float,
                               rng: np.random.Generator | int | None,
-                              wavelength_band_m: tuple[float, float] = (2.0, 200.0)
-                              ) -> pd.DataFrame:
+                              wavelength_band_m: tuple[float, float] = (2.0, 200.0), *,
+                              amplitudes: str = "random_phase") -> pd.DataFrame:
     """Profiles from tabulated one-sided PSDs (estimated, selected or forecast spectra).
 
     ``psd_by_channel`` maps channel names (any subset of the four spectral channels) to PSD
     values in mm²/(1/m) on the common ``spatial_frequency_per_m`` grid (1/m). Between table
     points the PSD is interpolated linearly in log-log; the band must lie inside the table.
     Returns ``chainage_m`` and one ``<channel>_mm`` column per given channel, channels
-    synthesised independently in :data:`SPECTRAL_CHANNELS` order.
+    synthesised independently in :data:`SPECTRAL_CHANNELS` order (``amplitudes``:
+    :func:`synthesize_channel`).
     """
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     unknown = set(psd_by_channel) - set(SPECTRAL_CHANNELS)
@@ -196,6 +291,6 @@ def synthesize_from_psd_table(spatial_frequency_per_m, psd_by_channel: Mapping[s
         interpolator = psd_table_interpolator(spatial_frequency_per_m, psd_by_channel[channel],
                                               label=f"PSD table, channel {channel}")
         columns[f"{channel}_mm"] = synthesize_channel(interpolator, length_m, dx_m, rng,
-                                                      wavelength_band_m)
+                                                      wavelength_band_m, amplitudes=amplitudes)
     n_samples = next(iter(columns.values())).size
     return pd.DataFrame({"chainage_m": np.arange(n_samples) * float(dx_m), **columns})

@@ -5,7 +5,10 @@ function ``g`` (points of shape (n, n_dims) in standard-normal space -> values o
 failure where g <= 0). Every estimator returns a :class:`FailureProbability` with the
 probability, its confidence interval, its coefficient of variation and the number of model
 evaluations. Methods: ``"monte_carlo"`` (the reference) and ``"subset"`` (subset simulation,
-Au & Beck 2001); docs/reliability.md, "Rare events".
+Au & Beck 2001); docs/reliability.md, "Rare events". The coupled model as a limit state:
+:class:`ttbpipe.reliability.coupled.CoupledLimitState` with the inputs map
+:class:`ttbpipe.reliability.inputs.StandardNormalInputs` (u -> irregularity profile and field
+factors of a study sample).
 """
 
 from __future__ import annotations
