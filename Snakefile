@@ -22,6 +22,7 @@ include: "workflow/rules/tipm.smk"
 include: "workflow/rules/fields.smk"
 include: "workflow/rules/study.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/reliability.smk"
 include: "workflow/rules/cases.smk"
 
 

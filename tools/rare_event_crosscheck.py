@@ -41,7 +41,9 @@ def build(args):
         n_dims = model.n_dims
 
         def map(self, u):
-            return model.profile(u), None
+            track = model.profile(u)
+            track["chainage_m"] -= float(irr["lead_in_m"])   # the study's lead-in
+            return track, None
 
     return case, Inputs(), float(irr["lead_in_m"]), model
 
@@ -76,7 +78,7 @@ def main(argv=None) -> int:
     mc_path = out / "monte_carlo.parquet"
     if args.stage in ("mc", "all"):
         done = pd.read_parquet(mc_path) if mc_path.exists() else pd.DataFrame()
-        g = CoupledLimitState(case, inputs, args.index, 1.0, lead_in, args.workers)
+        g = CoupledLimitState(case, inputs, args.index, 1.0, args.workers)
         start = len(done)
         t0 = time.time()
         chunk = 200
@@ -102,7 +104,7 @@ def main(argv=None) -> int:
         settings = SubsetSettings(n_per_level=args.n_per_level)
         sus = SubsetSimulation.load(state) if state.exists() else \
             SubsetSimulation(inputs.n_dims, args.seed, settings)
-        g = CoupledLimitState(case, inputs, args.index, limit, lead_in, args.workers)
+        g = CoupledLimitState(case, inputs, args.index, limit, args.workers)
         t0 = time.time()
         while not sus.done:
             points = sus.ask()

@@ -148,4 +148,5 @@ def all_targets() -> list[str]:
     targets.append(results_path("fields/samples.parquet"))
     targets += tipm_targets()  # workflow/rules/tipm.smk
     targets += study_targets()  # workflow/rules/report.smk
+    targets += subset_targets()  # workflow/rules/reliability.smk
     return targets

@@ -18,7 +18,7 @@ import logging
 import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from typing import Any, Mapping, Protocol
+from typing import Any, Callable, Mapping, Protocol
 
 import numpy as np
 import pandas as pd
@@ -37,17 +37,14 @@ class InputMap(Protocol):
 
 
 @pinned
-def run_point(case: Mapping[str, Any], input_map: InputMap, u: np.ndarray,
-              lead_in_m: float) -> dict[str, float]:
+def run_point(case: Mapping[str, Any], input_map: InputMap, u: np.ndarray) -> dict[str, float]:
     """Response indices (the extremes row of :func:`ttbpipe.study.samples.extremes_from_run`)
-    of the coupled run at standard-normal point u."""
+    of the coupled run at standard-normal point u; the profile's chainage is the structure's
+    (the inputs map places it, lead-in included)."""
     from ..simulation.coupled import run_coupled
     from ..study.samples import extremes_from_run
 
     track, factors = input_map.map(np.asarray(u, dtype=float))
-    track = track.copy()
-    # the profile starts lead_in_m behind x = 0, as the study's samples do
-    track["chainage_m"] = track["chainage_m"] - track["chainage_m"].iloc[0] - float(lead_in_m)
     _, summary = run_coupled(copy.deepcopy(dict(case)), track=track, factors=factors)
     return extremes_from_run(summary)
 
@@ -55,13 +52,13 @@ def run_point(case: Mapping[str, Any], input_map: InputMap, u: np.ndarray,
 _WORKER: dict[str, Any] = {}
 
 
-def _init_worker(case, input_map, lead_in_m) -> None:
+def _init_worker(case, input_map) -> None:
     os.environ.update(WORKER_ENV)
-    _WORKER.update(case=case, input_map=input_map, lead_in_m=lead_in_m)
+    _WORKER.update(case=case, input_map=input_map)
 
 
 def _worker_run(u: np.ndarray) -> dict[str, float]:
-    return run_point(_WORKER["case"], _WORKER["input_map"], u, _WORKER["lead_in_m"])
+    return run_point(_WORKER["case"], _WORKER["input_map"], u)
 
 
 @dataclass
@@ -71,7 +68,8 @@ class CoupledLimitState:
     ``case``: a case configuration of :func:`run_coupled` without irregularity source (built by
     :func:`ttbpipe.study.samples.build_case`); ``index``: a column of the extremes table
     (``max_wheel_unloading_ratio``, an assessed ``<profile>_<index>`` column...); ``limit``:
-    its limit (same unit). ``workers`` processes evaluate a batch (1: in this process). Every
+    its limit (same unit), or a function of the run's extremes row giving it (a threshold that
+depends on the train speed or the static axle load). ``workers`` processes evaluate a batch (1: in this process). Every
     evaluated row is kept in :attr:`evaluations` (u's index in call order, all indices), so
     that one set of runs can serve several thresholds and the tail model.
     """
@@ -79,12 +77,11 @@ class CoupledLimitState:
     case: Mapping[str, Any]
     input_map: InputMap
     index: str
-    limit: float
-    lead_in_m: float = 20.0
+    limit: float | Callable[[Mapping[str, float]], float]
     workers: int = 1
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.limit) and self.limit > 0):
+        if not callable(self.limit) and not (np.isfinite(self.limit) and self.limit > 0):
             raise ValueError(f"limit of {self.index} must be finite and > 0, got {self.limit}")
         self.n_dims = int(self.input_map.n_dims)
         self.evaluations: list[dict[str, float]] = []
@@ -96,11 +93,11 @@ class CoupledLimitState:
         if points.shape[1] != self.n_dims:
             raise ValueError(f"points of dimension {points.shape[1]}, the inputs have {self.n_dims}")
         if self.workers <= 1:
-            return [run_point(self.case, self.input_map, u, self.lead_in_m) for u in points]
+            return [run_point(self.case, self.input_map, u) for u in points]
         if self._pool is None:
             self._pool = ProcessPoolExecutor(
                 self.workers, initializer=_init_worker,
-                initargs=(self.case, self.input_map, self.lead_in_m))
+                initargs=(self.case, self.input_map))
         return list(self._pool.map(_worker_run, list(points),
                                    chunksize=max(1, len(points) // (4 * self.workers))))
 
@@ -112,7 +109,9 @@ class CoupledLimitState:
                            f"{sorted(rows[0])}")
         self.evaluations.extend(rows)
         values = np.array([r[self.index] for r in rows], dtype=float)
-        return 1.0 - values / float(self.limit)
+        limits = np.array([self.limit(r) if callable(self.limit) else self.limit for r in rows],
+                          dtype=float)
+        return 1.0 - values / limits
 
     def close(self) -> None:
         if self._pool is not None:

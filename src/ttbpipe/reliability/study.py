@@ -1,0 +1,178 @@
+"""The study's subset-simulation scenario: rare exceedances of the coupled model's limits.
+
+``study.scenarios.subset`` (schema: ``study.schema.yaml``) runs, per configured limit, subset
+simulation (:mod:`ttbpipe.reliability.subset`) of ``g(u) = 1 - index / limit`` with the study's
+coupled model (train, structure, run settings of ``simulation:``), its random inputs a function
+of standard normals (:class:`ttbpipe.reliability.inputs.StandardNormalInputs`: Gaussian
+irregularity of ``simulation.irregularity.spectrum``, and the fields of ``condition``), seeded
+by the study seed. Each chain step's points are evaluated in worker processes; the estimator's
+state is saved after every ask and every tell (temporary file + rename), so a killed run resumes
+where it stopped and gives the same estimate as an uninterrupted one. The result is one row
+(:data:`RESULT_COLUMNS`) plus the levels table.
+
+Runs outside Snakemake too::
+
+    python -m ttbpipe.reliability.study --config config/config.yaml --limit wheel_unloading_ratio \
+        --out results/study/subset/wheel_unloading_ratio.parquet --workers 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import hashlib
+import json
+import logging
+import os
+import time
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from ..configuration import validate_section
+from ..stats.limits import limits_from_config
+from .coupled import CoupledLimitState
+from .subset import SubsetSettings, SubsetSimulation
+
+log = logging.getLogger(__name__)
+
+__all__ = ["resolve_subset", "subset_inputs", "run_subset_limit", "RESULT_COLUMNS",
+           "SCENARIO_LABEL"]
+
+#: Scenario label of the subset-simulation estimates in the reliability tables.
+SCENARIO_LABEL = "subset"
+
+RESULT_COLUMNS = ("scenario", "limit", "column", "threshold", "probability", "ci_low", "ci_high",
+                  "cov", "reliability_index", "n_evaluations", "method", "confidence_level",
+                  "n_dims", "n_levels", "wall_time_s")
+
+
+def resolve_subset(config: Mapping[str, Any]) -> dict[str, Any]:
+    """``study.scenarios.subset`` validated, defaults filled in."""
+    return validate_section((config.get("study") or {}).get("scenarios"), "study",
+                            "scenarios")["subset"]
+
+
+def subset_inputs(config: Mapping[str, Any], settings: Mapping[str, Any]):
+    """The standard-normal input map of the scenario (no fields for ``condition: none``)."""
+    from .inputs import StandardNormalInputs
+
+    if settings["condition"] == "none" or config.get("fields") is None:
+        config = {k: v for k, v in config.items() if k != "fields"}
+        return StandardNormalInputs(config)
+    return StandardNormalInputs(config, condition=settings["condition"])
+
+
+def _case(config: Mapping[str, Any], inputs) -> dict[str, Any]:
+    from ..study.samples import build_case, resolve_simulation
+
+    sim = resolve_simulation(config.get("simulation"))
+    return build_case(sim, config.get("structure") or {}, irregularity=inputs.irregularity_settings)
+
+
+def _limit(config: Mapping[str, Any], name: str):
+    limits, context = limits_from_config(config.get("limits"))
+    by_name = {lim.name: lim for lim in limits}
+    if name not in by_name:
+        raise ValueError(f"study.scenarios.subset.limits: {name!r} is not an enabled limit of the "
+                         f"limits: section; enabled: {sorted(by_name)}")
+    limit = by_name[name]
+
+    def threshold(row: Mapping[str, float]) -> float:
+        return float(limit.thresholds(pd.DataFrame([dict(row)]), context)[0])
+
+    return limit, threshold
+
+
+def settings_digest(config: Mapping[str, Any], limit_name: str, model_version: str = "") -> str:
+    """Digest of everything the estimate depends on (the state file carries it: a state of other
+    settings is never resumed)."""
+    keys = {k: config.get(k) for k in ("structure", "simulation", "fields", "limits")}
+    keys["seed"] = int(config["study"]["seed"])
+    keys["subset"] = resolve_subset(config)
+    keys["limit"] = limit_name
+    keys["model_version"] = model_version
+    return hashlib.sha256(json.dumps(keys, sort_keys=True, default=str).encode()).hexdigest()[:12]
+
+
+def run_subset_limit(config: Mapping[str, Any], limit_name: str, out: str | os.PathLike[str], *,
+                     state_dir: str | os.PathLike[str] | None = None, workers: int = 1,
+                     model_version: str = "", stop_after_evaluations: int | None = None
+                     ) -> pd.DataFrame:
+    """Subset simulation of one limit; writes ``out`` (one row, :data:`RESULT_COLUMNS`) and
+    ``<out stem>.levels.csv``; returns the row.
+
+    ``state_dir`` (default: beside ``out``) holds ``<limit>.<digest>.state.npz``, the resumable
+    state. ``stop_after_evaluations`` stops (raising ``KeyboardInterrupt``, as a kill would)
+    once that many model runs are done: for testing resumption.
+    """
+    out = Path(out)
+    settings = resolve_subset(config)
+    inputs = subset_inputs(config, settings)
+    limit, threshold = _limit(config, limit_name)
+    digest = settings_digest(config, limit_name, model_version)
+    state_dir = Path(state_dir) if state_dir is not None else out.parent
+    state_dir.mkdir(parents=True, exist_ok=True)
+    state_path = state_dir / f"{limit_name}.{digest}.state.npz"
+    sus_settings = SubsetSettings(n_per_level=settings["n_per_level"],
+                                  level_probability=settings["level_probability"],
+                                  max_levels=settings["max_levels"],
+                                  confidence_level=float((config.get("limits") or {}).get(
+                                      "confidence_level", 0.95)))
+    if state_path.exists():
+        sus = SubsetSimulation.load(state_path)
+        log.info("%s: resuming subset simulation at level %d after %d runs (%s)", limit_name,
+                 sus.level, sus.n_evaluations, state_path)
+    else:
+        sus = SubsetSimulation(inputs.n_dims, int(config["study"]["seed"]), sus_settings)
+    log.info("%s: subset simulation in %d standard-normal dimensions (%s)", limit_name,
+             inputs.n_dims, inputs.describe())
+    t0 = time.time()
+    with CoupledLimitState(_case(config, inputs), inputs, limit.column, threshold,
+                           workers) as g:
+        while not sus.done:
+            points = sus.ask()
+            sus.save(state_path)
+            sus.tell(g(points))
+            sus.save(state_path)
+            log.info("%s: level %d, %d runs", limit_name, sus.level, sus.n_evaluations)
+            if stop_after_evaluations is not None and sus.n_evaluations >= stop_after_evaluations:
+                raise KeyboardInterrupt(f"stopped after {sus.n_evaluations} runs (test)")
+    result = sus.result()
+    levels = result.details["levels"]
+    row = {"scenario": SCENARIO_LABEL, "limit": limit.name, "column": limit.column,
+           "threshold": threshold(g.evaluations[0]) if g.evaluations else float("nan"),
+           **result.as_row(), "n_dims": inputs.n_dims, "n_levels": len(levels),
+           "wall_time_s": time.time() - t0}
+    table = pd.DataFrame([row], columns=list(RESULT_COLUMNS))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(out.name + ".tmp")
+    table.to_parquet(tmp)
+    os.replace(tmp, out)
+    levels_path = out.with_suffix(".levels.csv")
+    levels.to_csv(levels_path.with_name(levels_path.name + ".tmp"), index=False)
+    os.replace(levels_path.with_name(levels_path.name + ".tmp"), levels_path)
+    log.info("%s: %s", limit_name, result)
+    return table
+
+
+def main(argv: list[str] | None = None) -> int:
+    import yaml
+
+    parser = argparse.ArgumentParser(description="subset simulation of one limit of a study")
+    parser.add_argument("--config", required=True)
+    parser.add_argument("--limit", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--workers", type=int, default=1)
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
+    with open(args.config) as fh:
+        config = yaml.safe_load(fh)
+    run_subset_limit(copy.deepcopy(config), args.limit, args.out, workers=args.workers)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

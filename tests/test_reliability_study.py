@@ -1,0 +1,74 @@
+"""The study's subset-simulation scenario on the coupled model (ttbpipe.reliability.study).
+
+A tiny coupled configuration (one car, one 32 m span, 0.18 s of run) with a carbody limit low
+enough that two or three levels reach it with N = 20 per level. Checked: the estimate's
+structure (probability inside its interval, evaluations = N + (levels - 1) (N - Nc)), that a
+run killed mid-level leaves no output and resumes to the same numbers bit for bit, that the
+estimate does not depend on the number of worker processes, and that the rule exists in the
+workflow. Accuracy of the estimator itself: tests/test_reliability_estimators.py (exact
+references); on the coupled model against Monte Carlo: docs/reliability.md §10.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+
+import pandas as pd
+import pytest
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+from ttbpipe.reliability.study import RESULT_COLUMNS, run_subset_limit  # noqa: E402
+
+CONFIG = {
+    "study": {"seed": 3, "scenarios": {"subset": {"enabled": True,
+                                                  "limits": ["carbody_vertical_acc"],
+                                                  "n_per_level": 20}}},
+    "structure": {"layout": {"approach_length_m": 30.0, "spans_m": [32.0],
+                             "approach_track": "ballasted", "bridge_track": "slab"}},
+    "simulation": {"train": {"composition": ["trailer"]}, "end_x_m": 40.0},
+    # far below TB 10621's 1.275 m/s^2, so that a few levels reach it
+    "limits": {"thresholds": {"carbody_vertical_acc": 0.12}},
+}
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("subset") / "carbody_vertical_acc.parquet"
+    row = run_subset_limit(copy.deepcopy(CONFIG), "carbody_vertical_acc", out, workers=1)
+    return out, row
+
+
+def test_estimate_row_and_levels(uninterrupted):
+    out, row = uninterrupted
+    assert list(row.columns) == list(RESULT_COLUMNS)
+    r = row.iloc[0]
+    assert r["threshold"] == 0.12 and r["column"] == "max_carbody_vertical_acc_m_s2"
+    assert 0.0 < r["probability"] < 0.1
+    assert r["ci_low"] < r["probability"] < r["ci_high"]
+    assert r["n_evaluations"] == 20 + (r["n_levels"] - 1) * 18
+    levels = pd.read_csv(out.with_suffix(".levels.csv"))
+    assert len(levels) == r["n_levels"]
+    pd.testing.assert_frame_equal(pd.read_parquet(out), row)
+
+
+def test_killed_run_resumes_to_the_same_estimate(uninterrupted, tmp_path):
+    _, reference = uninterrupted
+    out = tmp_path / "carbody_vertical_acc.parquet"
+    with pytest.raises(KeyboardInterrupt):
+        run_subset_limit(copy.deepcopy(CONFIG), "carbody_vertical_acc", out, workers=1,
+                         stop_after_evaluations=29)
+    assert not out.exists()                      # no partial output
+    assert len(list(tmp_path.glob("*.state.npz"))) == 1
+    # resumed with two worker processes: neither the kill nor the process count changes a value
+    row = run_subset_limit(copy.deepcopy(CONFIG), "carbody_vertical_acc", out, workers=2)
+    columns = [c for c in RESULT_COLUMNS if c != "wall_time_s"]
+    pd.testing.assert_frame_equal(row[columns], reference[columns], check_exact=True)
+
+
+def test_unknown_or_disabled_limit_is_named():
+    config = copy.deepcopy(CONFIG)
+    config["limits"]["disabled"] = ["carbody_vertical_acc"]
+    with pytest.raises(ValueError, match="carbody_vertical_acc"):
+        run_subset_limit(config, "carbody_vertical_acc", "/nonexistent/x.parquet")

@@ -1,0 +1,35 @@
+# Stage: rare-event reliability (docs/reliability.md §9). With study.scenarios.subset enabled,
+# one job per configured limit runs subset simulation of the coupled model in standard-normal
+# space (ttbpipe.reliability.study). The job evaluates each chain step's points in `threads`
+# worker processes and saves the estimator's state after every step
+# (results/study/subset/state/<limit>.<digest>.state.npz, not a Snakemake output, so a killed
+# job keeps it): rerunning the job resumes where it stopped, with the same result.
+
+from ttbpipe.reliability.study import resolve_subset as _subset_resolve
+
+SUBSET = _subset_resolve(config)
+
+
+def subset_targets() -> list[str]:
+    """The subset-simulation estimates of the configured limits (none when disabled)."""
+    if not SUBSET["enabled"]:
+        return []
+    return expand(results_path("study/subset/{limit}.parquet"), limit=SUBSET["limits"])
+
+
+rule subset_simulation:
+    """Subset simulation of one limit of the coupled model (rare exceedance probability)."""
+    output:
+        results_path("study/subset/{limit}.parquet"),
+        results_path("study/subset/{limit}.levels.csv"),
+    params:
+        subset=SUBSET,
+        version=MODEL_VERSION,
+        state_dir=results_path("study/subset/state"),
+    wildcard_constraints:
+        limit=r"[a-z_]+",
+    threads: workflow.cores
+    log:
+        log_path("study/subset/{limit}.log"),
+    script:
+        "../scripts/subset_simulation.py"
