@@ -24,6 +24,7 @@ from ttbpipe.reliability.study import RESULT_COLUMNS, run_subset_limit  # noqa: 
 CONFIG = {
     "study": {"seed": 3, "scenarios": {"subset": {"enabled": True,
                                                   "limits": ["carbody_vertical_acc"],
+                                                  "spectrum": "standard",
                                                   "n_per_level": 20}}},
     "structure": {"layout": {"approach_length_m": 30.0, "spans_m": [32.0],
                              "approach_track": "ballasted", "bridge_track": "slab"}},
@@ -72,3 +73,45 @@ def test_unknown_or_disabled_limit_is_named():
     config["limits"]["disabled"] = ["carbody_vertical_acc"]
     with pytest.raises(ValueError, match="carbody_vertical_acc"):
         run_subset_limit(config, "carbody_vertical_acc", "/nonexistent/x.parquet")
+
+
+def test_population_spectrum_draws_the_level_from_the_fits(tmp_path):
+    """spectrum: population: the inputs map fits the campaign's PSD population and adds one
+    level dimension per channel; u = 0 gives the median level, a high level normal a rougher
+    profile (the per-frequency quantile grows with the level), and the digest follows the data."""
+    import numpy as np
+
+    from ttbpipe.channels import SPECTRAL_CHANNELS
+    from ttbpipe.irregularity.spectra import get_spectrum
+    from ttbpipe.reliability.study import resolve_subset, settings_digest, subset_inputs
+    from ttbpipe.tipm import synthetic_population
+
+    freq = np.arange(5, 501, 5) / 1000.0
+    spectrum = get_spectrum("tbt3352")
+    mean = np.stack([spectrum.psd_mm2_m(c, freq) for c in SPECTRAL_CHANNELS], axis=1)
+    pop = synthetic_population(60, freq, mean, np.random.default_rng(1), welch_dof=2.0)
+    rows = []
+    for s in range(pop.n_sections):
+        for k, c in enumerate(pop.channels):
+            rows.append(pd.DataFrame({"section": s, "section_start_m": 200.0 * s,
+                                      "section_end_m": 200.0 * (s + 1), "channel": c,
+                                      "spatial_frequency_per_m": pop.frequency_per_m,
+                                      "psd_mm2_m": pop.psd_mm2_m[s, :, k]}))
+    path = tmp_path / "2025-12-15.parquet"
+    pd.concat(rows).to_parquet(path)
+    config = copy.deepcopy(CONFIG)
+    config["study"]["scenarios"]["subset"]["spectrum"] = "population"
+    settings = resolve_subset(config)
+    with pytest.raises(ValueError, match="spectrum: standard"):
+        subset_inputs(config, settings, None)
+    inputs = subset_inputs(config, settings, [str(path)])
+    levels = {k: v for k, v in inputs.describe().items() if k.endswith("/level")}
+    assert len(levels) == 4 and all(v == 1 for v in levels.values())
+    u = np.zeros(inputs.n_dims)
+    u[inputs.slices["irregularity/vertical/coefficients"]] = 1.0
+    median = inputs.profile(u)["vertical_mm"].std()
+    u[inputs.slices["irregularity/vertical/level"]] = 2.0
+    assert inputs.profile(u)["vertical_mm"].std() > 1.2 * median
+    digest = settings_digest(config, "carbody_vertical_acc", "v", [str(path)])
+    pd.concat(rows[:-1] + [rows[-1].assign(psd_mm2_m=rows[-1]["psd_mm2_m"] * 2)]).to_parquet(path)
+    assert settings_digest(config, "carbody_vertical_acc", "v", [str(path)]) != digest

@@ -17,8 +17,17 @@ def subset_targets() -> list[str]:
     return expand(results_path("study/subset/{limit}.parquet"), limit=SUBSET["limits"])
 
 
+def subset_inputs(wildcards) -> list[str]:
+    """PSD tables of the latest campaign's population (spectrum: population), else none."""
+    if SUBSET["spectrum"] != "population":
+        return []
+    return tipm_population_psds(type("W", (), {"date": TIPM_LAST}))
+
+
 rule subset_simulation:
     """Subset simulation of one limit of the coupled model (rare exceedance probability)."""
+    input:
+        population=subset_inputs,
     output:
         results_path("study/subset/{limit}.parquet"),
         results_path("study/subset/{limit}.levels.csv"),

@@ -26,7 +26,7 @@ import logging
 import os
 import time
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -55,14 +55,31 @@ def resolve_subset(config: Mapping[str, Any]) -> dict[str, Any]:
                             "scenarios")["subset"]
 
 
-def subset_inputs(config: Mapping[str, Any], settings: Mapping[str, Any]):
-    """The standard-normal input map of the scenario (no fields for ``condition: none``)."""
+def subset_inputs(config: Mapping[str, Any], settings: Mapping[str, Any],
+                  population_paths: Sequence[str] | None = None):
+    """The standard-normal input map of the scenario (no fields for ``condition: none``).
+
+    ``spectrum: population`` needs the PSD tables of the latest campaign's population
+    (``population_paths``): the levels are then drawn from its per-frequency fits with the
+    cross-channel level correlation measured on its sections
+    (:meth:`ttbpipe.irregularity.gaussian.GaussianIrregularityModel.from_population`)."""
     from .inputs import StandardNormalInputs
 
-    if settings["condition"] == "none" or config.get("fields") is None:
+    spectrum = None
+    if settings["spectrum"] == "population":
+        if not population_paths:
+            raise ValueError("study.scenarios.subset.spectrum: population needs the PSD tables of "
+                             "the latest campaign's population; pass them, or set spectrum: "
+                             "standard to use simulation.irregularity.spectrum")
+        from ..tipm.population import PSDPopulation
+        from ..tipm.stages import load_population
+
+        spectrum = PSDPopulation.concat(load_population(list(population_paths), None))
+    condition = settings["condition"]
+    if condition == "none" or config.get("fields") is None:
         config = {k: v for k, v in config.items() if k != "fields"}
-        return StandardNormalInputs(config)
-    return StandardNormalInputs(config, condition=settings["condition"])
+        condition = "all"
+    return StandardNormalInputs(config, spectrum=spectrum, condition=condition)
 
 
 def _case(config: Mapping[str, Any], inputs) -> dict[str, Any]:
@@ -86,10 +103,14 @@ def _limit(config: Mapping[str, Any], name: str):
     return limit, threshold
 
 
-def settings_digest(config: Mapping[str, Any], limit_name: str, model_version: str = "") -> str:
-    """Digest of everything the estimate depends on (the state file carries it: a state of other
-    settings is never resumed)."""
-    keys = {k: config.get(k) for k in ("structure", "simulation", "fields", "limits")}
+def settings_digest(config: Mapping[str, Any], limit_name: str, model_version: str = "",
+                    population_paths: Sequence[str] | None = None) -> str:
+    """Digest of everything the estimate depends on, input files' contents included (the state
+    file's name carries it: a state of other settings or data is never resumed)."""
+    keys: dict[str, Any] = {k: config.get(k) for k in ("structure", "simulation", "fields",
+                                                       "limits")}
+    keys["population"] = [hashlib.sha256(Path(p).read_bytes()).hexdigest()
+                          for p in sorted(population_paths or [])]
     keys["seed"] = int(config["study"]["seed"])
     keys["subset"] = resolve_subset(config)
     keys["limit"] = limit_name
@@ -98,6 +119,7 @@ def settings_digest(config: Mapping[str, Any], limit_name: str, model_version: s
 
 
 def run_subset_limit(config: Mapping[str, Any], limit_name: str, out: str | os.PathLike[str], *,
+                     population_paths: Sequence[str] | None = None,
                      state_dir: str | os.PathLike[str] | None = None, workers: int = 1,
                      model_version: str = "", stop_after_evaluations: int | None = None
                      ) -> pd.DataFrame:
@@ -110,9 +132,9 @@ def run_subset_limit(config: Mapping[str, Any], limit_name: str, out: str | os.P
     """
     out = Path(out)
     settings = resolve_subset(config)
-    inputs = subset_inputs(config, settings)
     limit, threshold = _limit(config, limit_name)
-    digest = settings_digest(config, limit_name, model_version)
+    inputs = subset_inputs(config, settings, population_paths)
+    digest = settings_digest(config, limit_name, model_version, population_paths)
     state_dir = Path(state_dir) if state_dir is not None else out.parent
     state_dir.mkdir(parents=True, exist_ok=True)
     state_path = state_dir / f"{limit_name}.{digest}.state.npz"
@@ -165,12 +187,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--config", required=True)
     parser.add_argument("--limit", required=True)
     parser.add_argument("--out", required=True)
+    parser.add_argument("--population", nargs="*", default=None,
+                        help="PSD tables (results/psd/<date>.parquet) of the population "
+                             "(spectrum: population)")
     parser.add_argument("--workers", type=int, default=1)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     with open(args.config) as fh:
         config = yaml.safe_load(fh)
-    run_subset_limit(copy.deepcopy(config), args.limit, args.out, workers=args.workers)
+    run_subset_limit(copy.deepcopy(config), args.limit, args.out, workers=args.workers,
+                     population_paths=args.population)
     return 0
 
 
