@@ -87,6 +87,8 @@ class TailSettings:
     limit whose return period exceeds that multiple of the largest observation's;
     ``gof_bootstrap`` replications give the goodness-of-fit p-value (0: statistic only);
     ``n_bootstrap`` replications for ``interval='bootstrap'``; ``seed`` makes both deterministic.
+    19 goodness-of-fit replications keep a study's tables fast; their smallest p-value, 0.05, is
+    what flags a poor fit (raise it for a finer p-value).
     """
 
     model: str = "gev"
@@ -97,7 +99,7 @@ class TailSettings:
     confidence_level: float = 0.95
     interval: str = "profile"
     n_bootstrap: int = 200
-    gof_bootstrap: int = 49
+    gof_bootstrap: int = 19
     extrapolation_factor: float = 100.0
     min_shape: float = -0.5
     seed: int = 0
@@ -503,52 +505,45 @@ def estimate_tail(x, limit: float, weights=None,
     weighted = not np.allclose(a, 1.0, rtol=1e-12, atol=0.0)
     notes: list[str] = []
 
-    # Curvature and sandwich in the (log p, free) parametrisation, when log p is finite.
+    # Curvature and sandwich in the model's own parametrisation (well conditioned), carried to
+    # log p by the delta method: var(log p) = g' V g with g the gradient of log p(theta).
     free_hat = model.free(theta)
+    theta = np.asarray(theta, float)
+    grads, hess = _derivatives(lambda t: model.logf(t), theta, a)
+    info = -hess
+    if not (np.isfinite(info).all() and np.isfinite(grads).all()):
+        raise TailNotEstimable(f"{model.name} likelihood not differentiable at the optimum "
+                               "(an observation at the support's end)")
+    try:
+        np.linalg.cholesky(info)
+    except np.linalg.LinAlgError:
+        raise TailNotEstimable(f"{model.name} likelihood curvature at the optimum is not "
+                               "positive definite: no interval") from None
+    inv = np.linalg.inv(info)
+    sg = grads * a[:, None]
+    sand = inv @ (sg.T @ sg) @ inv
     var_lp, c_adj = np.nan, 1.0
     if np.isfinite(lp_hat) and lp_hat < 0:
-        psi = np.concatenate([[lp_hat], free_hat])
-
-        def vec(p):
-            t = model.from_logp(p[0], p[1:], zs)
-            with np.errstate(all="ignore"):
-                return np.full(a.size, -np.inf) if t is None else model.logf(t)
-
-        grads, hess = _derivatives(vec, psi, a)
-        info = -hess
-        if not (np.isfinite(info).all() and np.isfinite(grads).all()):
-            raise TailNotEstimable(f"{model.name} likelihood not differentiable at the optimum "
-                                   "(an observation at the support's end)")
-        try:
-            np.linalg.cholesky(info)
-        except np.linalg.LinAlgError:
-            raise TailNotEstimable(f"{model.name} likelihood curvature at the optimum is not "
-                                   "positive definite: no interval") from None
-        inv = np.linalg.inv(info)
-        if weighted:
-            sg = grads * a[:, None]
-            sand = inv @ (sg.T @ sg) @ inv
-            var_lp = float(sand[0, 0])
-            c_adj = var_lp / float(inv[0, 0])
-        else:
-            var_lp = float(inv[0, 0])
+        h = 1e-5 * np.maximum(1.0, np.abs(theta))
+        glp = np.array([(model.log_p(theta + h[j] * e, zs) - model.log_p(theta - h[j] * e, zs))
+                        / (2.0 * h[j]) for j, e in enumerate(np.eye(theta.size))])
+        if np.isfinite(glp).all():
+            v_model, v_sand = float(glp @ inv @ glp), float(glp @ sand @ glp)
+            var_lp = v_sand if weighted else v_model
+            if weighted and v_model > 0:
+                c_adj = v_sand / v_model
     elif weighted:
-        # log p at -inf (limit beyond the fitted end point): the conservative bound of the ratio,
-        # the largest eigenvalue of I^-1 J in the model's own parametrisation.
-        grads, hess = _derivatives(lambda t: model.logf(t), np.asarray(theta, float), a)
-        sg = grads * a[:, None]
-        try:
-            c_adj = float(np.max(np.real(np.linalg.eigvals(np.linalg.solve(-hess, sg.T @ sg)))))
-        except np.linalg.LinAlgError:
-            raise TailNotEstimable(f"{model.name} likelihood curvature at the optimum is "
-                                   "singular: no interval") from None
-        c_adj = max(c_adj, 1.0)
+        # log p at -inf (limit beyond the fitted end point): the conservative bound of the ratio
+        # over all directions, the largest eigenvalue of I^-1 J.
+        c_adj = max(float(np.max(np.real(np.linalg.eigvals(inv @ (sg.T @ sg))))), 1.0)
 
     n = int(x.size)
     if settings.interval == "profile":
         cutoff = c_adj * float(stats.chi2.ppf(level, 1))
-        low, high = _profile_interval(model, zs, lp_hat, free_hat, nll_hat, cutoff, var_lp)
-        cov = float(np.sqrt(np.expm1(var_lp))) if np.isfinite(var_lp) else np.nan
+        low, high = _profile_interval(model, zs, lp_hat, free_hat, nll_hat, cutoff, var_lp,
+                                      model.log_p(theta, float(np.max(xs))))
+        with np.errstate(over="ignore"):   # inf: the estimate is uncertain by decades
+            cov = float(np.sqrt(np.expm1(var_lp))) if np.isfinite(var_lp) else np.nan
         how = f"profile-likelihood {100 * level:g} %" + (
             f", sandwich-adjusted (c = {c_adj:.2f})" if weighted else "")
     else:
@@ -592,21 +587,25 @@ def estimate_tail(x, limit: float, weights=None,
         n_exceedances=n_exc, return_period_ratio=ratio, notes=tuple(notes))
 
 
-def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp):
+def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
     """Both ends of ``{log p : 2 (nll_prof(log p) - nll_hat) <= cutoff}`` (Coles 2001 §2.6.6):
-    bracket by growing steps from the estimate, then Brent's method to 1e-4 in log p."""
-    warm = [np.asarray(free_hat, float)]
-
+    bracket by growing steps from the estimate, then Brent's method to 1e-3 in log p. Each
+    profile point starts from the previous one (a continuous path); where that start is outside
+    the support at this p, from the best point of a grid of scales and shapes. When the estimate
+    is p = 0 the upper end is approached from ``lp_top`` (log p at the largest observation)."""
     fixed = np.asarray(free_hat, float)
-    # Where the warm start is outside the support at this p (the limit or an observation beyond
-    # the end point), wider scales and heavier shapes bring it back inside.
-    spare = [fixed + np.array([ds, dxi]) for ds in (0.5, 1.0, 2.0) for dxi in (0.0, 0.2)]
+    warm = [fixed]
+    grid = [fixed + np.array([ds, 0.0]) for ds in (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)]
+    grid += [np.array([fixed[0] + ds, xi]) for ds in (-2.0, -1.0, 0.0, 1.0)
+             for xi in (0.0, 0.1, 0.3, max(model.xi_min, -0.2))]
 
     def prof(lp):
         fun = lambda f: _nll(model, model.from_logp(lp, f, z))
-        starts = [warm[-1], fixed]
-        if not any(np.isfinite(fun(s)) for s in starts):
-            starts = spare
+        starts = next(([s] for s in (warm[-1], fixed) if np.isfinite(fun(s))), None)
+        if starts is None:
+            values = [fun(s) for s in grid]
+            k = int(np.argmin(values))
+            starts = [grid[k]] if np.isfinite(values[k]) else []
         res = _minimise(fun, starts, tol=1e-6)
         if res is None or not np.isfinite(res.fun):
             return np.inf
@@ -619,22 +618,34 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp):
         if lp not in cache:
             cache[lp] = 2.0 * (prof(lp) - nll_hat) - cutoff
         return cache[lp]
+
     upper_cap = np.log1p(-1e-12)
     se = np.sqrt(var_lp) if np.isfinite(var_lp) and var_lp > 0 else 1.0
     step0 = max(np.sqrt(cutoff) * se, 0.05)
 
+    def brent(a, b):
+        lo_end, hi_end = min(a, b), max(a, b)
+        if np.sign(g(lo_end)) == np.sign(g(hi_end)):
+            raise TailNotEstimable("profile likelihood is not monotone near the interval's end")
+        return optimize.brentq(lambda v: np.clip(g(v), -1e6, 1e6), lo_end, hi_end, xtol=1e-3)
+
     def end(direction: int) -> float:
-        warm[:] = [np.asarray(free_hat, float)]
-        if np.isfinite(lp_hat):
-            inner = lp_hat
-        else:   # p_hat = 0: start from the floor and search upward
+        warm[:] = [fixed]
+        inner = lp_hat
+        if not np.isfinite(lp_hat):   # p_hat = 0: the lower end is 0
             if direction < 0:
                 return _LOG_P_FLOOR
-            inner = _LOG_P_FLOOR
-            if g(inner) > 0:   # even the floor is implausible: the estimate is not 0
-                raise TailNotEstimable("profile likelihood inconsistent at p = 0")
+            inner = min(lp_top, upper_cap)
+            if g(inner) > 0:          # descend from the largest observation's probability
+                step = 1.0
+                for _ in range(60):
+                    outer = max(inner - step, _LOG_P_FLOOR)
+                    if g(outer) <= 0:
+                        return brent(outer, inner)
+                    if outer <= _LOG_P_FLOOR:
+                        return _LOG_P_FLOOR   # every p above the floor is implausible
+                    inner, step = outer, step * 1.8
         step = step0
-        outer = inner
         for _ in range(60):
             outer = inner + direction * step
             if direction > 0 and outer >= upper_cap:
@@ -653,15 +664,11 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp):
             step *= 1.8
         else:
             raise TailNotEstimable("profile likelihood did not reach the cutoff")
-        # Bisection-safe Brent on the cached bracket (xtol 1e-3 in log p: 0.1 % in p).
-        lo_end, hi_end = min(inner, outer), max(inner, outer)
-        if np.sign(g(lo_end)) == np.sign(g(hi_end)):
-            raise TailNotEstimable("profile likelihood is not monotone near the interval's end")
-        return optimize.brentq(lambda v: np.clip(g(v), -1e6, 1e6), lo_end, hi_end, xtol=1e-3)
+        return brent(inner, outer)
 
     low, high = end(-1), end(+1)
     low_p = 0.0 if low <= _LOG_P_FLOOR else float(np.exp(low))
-    high_p = 1.0 if high >= np.log1p(-1e-12) else float(np.exp(high))
+    high_p = 1.0 if high >= upper_cap else float(np.exp(high))
     return low_p, high_p
 
 
