@@ -324,7 +324,8 @@ def utilisation_html(summary: StudySummary) -> str:
                      P_utilisation_gt_1=[_p_cell(r) for _, r in u.iterrows()])[
         ["scenario", "section", "profile", "index", "clause", "category", "limit", "n_samples",
          "median_utilisation", "p95_utilisation", "max_utilisation", "max_sample_index",
-         "max_value", "P_utilisation_gt_1", "method", "status", "limit_source"]] if len(u) else u
+         "max_value", "P_utilisation_gt_1", "method", "tail_method", "target_text", "status",
+         "limit_source"]] if len(u) else u
     return table_html(shown, "Utilisation of the limits per scenario and index",
                       "utilisation = processed index / limit (docs/assessment.md); weighted median "
                       "and 95th percentile over the samples; max_value in SI units (index name); "
