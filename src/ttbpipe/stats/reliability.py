@@ -24,12 +24,35 @@ import numpy as np
 import pandas as pd
 from scipy import special, stats
 
+from ..reliability.tail import TailNotEstimable, TailSettings, estimate_tail, reliability_index
 from .limits import (Limit, LimitContext, LimitNotEvaluable, applied_threshold_text,
                      limits_from_config)
 
 log = logging.getLogger(__name__)
 
 INTERVAL_METHODS = ("wilson", "clopper-pearson")
+
+#: Default target per-passage exceedance probability: a one-year return period at 100 train
+#: pairs a day, 1 / (100 x 365) = 2.74e-5 (docs/reliability.md §9).
+DEFAULT_TARGET_PROBABILITY = 1.0 / (100 * 365)
+
+#: Columns the tail estimate adds to the reliability table (docs/studies.md).
+TAIL_COLUMNS = ("tail_model", "tail_probability", "tail_ci_low", "tail_ci_high", "tail_cov",
+                "tail_reliability_index", "tail_n_evaluations", "tail_method",
+                "tail_gof_statistic", "tail_gof_pvalue", "tail_gof_method", "tail_extrapolation",
+                "tail_status")
+#: Columns of the target verdict (see :func:`target_verdict`).
+VERDICT_COLUMNS = ("reliability_index", "target_probability", "verdict_basis", "target_verdict",
+                   "target_text")
+#: Target verdicts in words.
+MET, NOT_MET, NOT_SHOWN = "met", "not met", "not shown"
+
+
+def probability_text(p: float) -> str:
+    """A probability or bound as every page writes it: 3 significant digits, exponent below 1e-3."""
+    if p == 0:
+        return "0"
+    return f"{p:.3g}" if p >= 1e-3 else f"{p:.2e}"
 
 
 @dataclass(frozen=True)
@@ -300,21 +323,99 @@ def _samples_needed(est: ExceedanceEstimate, tolerance: float) -> int:
 
 @dataclass(frozen=True)
 class ReliabilitySettings:
-    """Confidence level, interval method and sample-size criterion (``limits:`` in the config)."""
+    """Confidence level, interval method, sample-size criterion, target probability per passage
+    and tail model (``limits:`` in the config; ``limits.tail`` for :class:`TailSettings`)."""
 
     confidence_level: float = 0.95
     method: str = "wilson"
     effective_size: str = "linearized"
     criterion: SampleSizeCriterion = SampleSizeCriterion()
+    target_probability: float = DEFAULT_TARGET_PROBABILITY
+    tail: TailSettings = TailSettings()
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.target_probability < 1.0:
+            raise ValueError(f"target_probability must be in (0, 1), got {self.target_probability}")
 
     @classmethod
     def from_config(cls, section: Mapping[str, Any] | None) -> "ReliabilitySettings":
         section = dict(section or {})
         crit = dict(section.get("sufficiency") or {})
-        return cls(confidence_level=float(section.get("confidence_level", 0.95)),
+        level = float(section.get("confidence_level", 0.95))
+        return cls(confidence_level=level,
                    method=section.get("interval", "wilson"),
                    effective_size=section.get("effective_size", "linearized"),
-                   criterion=SampleSizeCriterion(**crit))
+                   criterion=SampleSizeCriterion(**crit),
+                   target_probability=float(section.get("target_probability",
+                                                        DEFAULT_TARGET_PROBABILITY)),
+                   tail=TailSettings.from_config(section.get("tail"), confidence_level=level))
+
+
+def tail_columns(values: np.ndarray, thresholds: np.ndarray, weights: np.ndarray,
+                 settings: TailSettings, category: str = "limit") -> dict[str, Any]:
+    """The :data:`TAIL_COLUMNS` of one (scenario, limit): the tail model of the raw index when
+    the threshold is the same for every sample, else of the utilisation index / threshold
+    (exceedance at 1); a ``tail_status`` saying why when no estimate is given."""
+    empty = dict.fromkeys(TAIL_COLUMNS, np.nan)
+    empty["tail_extrapolation"] = False
+    if category == "grade":
+        return {**empty, "tail_status": "not estimated: grade boundary, not a limit"}
+    thresholds = np.broadcast_to(np.asarray(thresholds, dtype=float), np.shape(values))
+    constant = bool(np.all(thresholds == thresholds.flat[0]))
+    if constant:
+        x, z, of = values, float(thresholds.flat[0]), "of the raw index"
+    else:
+        if not (thresholds > 0).all():
+            return {**empty, "tail_status": "not estimated: per-sample thresholds not all > 0"}
+        x, z, of = values / thresholds, 1.0, "of index / per-sample threshold"
+    try:
+        est = estimate_tail(x, z, weights, settings)
+    except TailNotEstimable as exc:
+        return {**empty, "tail_status": f"no tail estimate: {exc}"}
+    return {"tail_model": est.model.upper(), "tail_probability": est.probability, "tail_ci_low": est.ci_low,
+            "tail_ci_high": est.ci_high, "tail_cov": est.cov,
+            "tail_reliability_index": est.reliability_index,
+            "tail_n_evaluations": est.n_evaluations, "tail_method": f"{est.method}, {of}",
+            "tail_gof_statistic": est.gof_statistic, "tail_gof_pvalue": est.gof_pvalue,
+            "tail_gof_method": est.gof_method, "tail_extrapolation": est.extrapolation,
+            "tail_status": est.status}
+
+
+def target_verdict(row: Mapping[str, Any], target: float) -> dict[str, Any]:
+    """Target verdict of one reliability row (the :data:`VERDICT_COLUMNS`).
+
+    The estimate stated and judged is the counting one when at least one sample exceeds (model
+    free), else the tail estimate when there is one (counting at k = 0 only bounds P). The
+    target is **met** when the interval's upper end is below it, **not met** when its lower end
+    is above it, else **not shown** (the interval straddles the target).
+    """
+    k = int(row["n_exceed"])
+    n = int(row["n_samples"])
+    tail_ok = np.isfinite(row.get("tail_probability", np.nan))
+    basis = "tail" if (k == 0 and tail_ok) else "counting"
+    if basis == "tail":
+        p, lo, hi = row["tail_probability"], row["tail_ci_low"], row["tail_ci_high"]
+        how = f"{row['tail_model']} tail, {n} runs"
+    else:
+        p, lo, hi = row["probability"], row["ci_low"], row["ci_high"]
+        how = f"counting, {k} of {n} runs exceed"
+    stated = f"P = {probability_text(p)} [{probability_text(lo)}, {probability_text(hi)}]"
+    t = probability_text(target)
+    if hi < target:
+        verdict, text = MET, f"{MET}: {stated} < target {t} ({how})"
+    elif lo > target:
+        verdict, text = NOT_MET, (f"{NOT_MET}: the interval's lower end {probability_text(lo)} "
+                                  f"exceeds the target {t}; {stated} ({how})")
+    else:
+        verdict, text = NOT_SHOWN, (f"{NOT_SHOWN}: the interval's upper end {probability_text(hi)} "
+                                    f"exceeds the target {t}; {stated} ({how})")
+    if basis == "counting" and k == 0:
+        text += f"; {row.get('tail_status', 'no tail estimate')}"
+    if basis == "tail" and row.get("tail_extrapolation"):
+        text += "; extrapolated far beyond the data: rests on the fitted tail shape"
+    return {"reliability_index": reliability_index(row["probability"]),
+            "target_probability": target, "verdict_basis": basis, "target_verdict": verdict,
+            "target_text": text}
 
 
 def _ordered(df: pd.DataFrame) -> pd.DataFrame:
@@ -327,7 +428,10 @@ def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
     """Exceedance probability, interval and verdict for every (scenario, limit).
 
     Limits whose column is absent, or that need an input nobody gives, appear with
-    ``status`` 'not evaluated: ...' (and a logged warning) instead of being dropped.
+    ``status`` 'not evaluated: ...' (and a logged warning) instead of being dropped. Every
+    evaluated row also carries the tail estimate (:data:`TAIL_COLUMNS`, :func:`tail_columns`;
+    skipped for grades), the reliability index of the counting estimate and the target verdict
+    (:data:`VERDICT_COLUMNS`, :func:`target_verdict`).
     """
     rows = []
     for scenario, block in extremes.groupby("scenario", sort=True):
@@ -352,12 +456,15 @@ def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
                 rows.append({**base, "status": f"not evaluated: {exc}"})
                 continue
             base["threshold"] = applied_threshold_text(limit, thresholds)
-            exceeded = block[limit.column].to_numpy(dtype=float) > thresholds
+            values = block[limit.column].to_numpy(dtype=float)
+            exceeded = values > thresholds
             est = _estimate(estimator, exceeded, weights)
             ok, reason = settings.criterion.judge(est)
-            rows.append({**base, **asdict(est), "half_width": est.half_width,
-                         "weighted": isinstance(estimator, WeightedExceedance),
-                         "sufficient": ok, "status": reason})
+            row = {**base, **asdict(est), "half_width": est.half_width,
+                   "weighted": isinstance(estimator, WeightedExceedance),
+                   "sufficient": ok, "status": reason,
+                   **tail_columns(values, thresholds, weights, settings.tail, limit.category)}
+            rows.append({**row, **target_verdict(row, settings.target_probability)})
     return pd.DataFrame(rows)
 
 

@@ -33,6 +33,8 @@ import pandas as pd
 
 from ..assessment.columns import display_name
 from ..io import jsonable, write_text
+from ..stats.reliability import (DEFAULT_TARGET_PROBABILITY, MET, NOT_MET, NOT_SHOWN,
+                                 TAIL_COLUMNS, VERDICT_COLUMNS, probability_text)
 
 #: Report category that holds the full summary (the main page points there).
 SUMMARY_CATEGORY = "0. Summary"
@@ -67,6 +69,11 @@ class StudySummary:
     upper_bounds: pd.Series    # per scenario: largest upper end of the P intervals over the limits
     utilisation: pd.DataFrame  # ttbpipe.study.utilisation.utilisation_table (empty without)
     margins: pd.DataFrame      # its governing scenario per index (utilisation.margins)
+    target: float = DEFAULT_TARGET_PROBABILITY  # target probability per passage
+
+    def verdicts(self, verdict: str) -> pd.DataFrame:
+        """The limit-scenario pairs with target verdict ``verdict`` (met / not met / not shown)."""
+        return self.limits[self.limits["target_verdict"] == verdict]
 
     @property
     def exceeded_by_probability(self) -> pd.DataFrame:
@@ -108,7 +115,8 @@ def summarize(assessment: pd.DataFrame, *, study: str | None = None,
     category = (evaluated["category"] if "category" in evaluated
                 else pd.Series("limit", index=evaluated.index))
     for column, dtype in (("n_exceed", "int64"), ("probability", "float64"),
-                          ("upper_one_sided", "float64"), ("sufficient", "bool")):
+                          ("upper_one_sided", "float64"), ("sufficient", "bool"),
+                          *((c, "object") for c in (*TAIL_COLUMNS, *VERDICT_COLUMNS))):
         if column not in evaluated:  # nothing could be evaluated
             evaluated = evaluated.assign(**{column: pd.Series(dtype=dtype)})
     limits = evaluated[category == "limit"]
@@ -130,7 +138,9 @@ def summarize(assessment: pd.DataFrame, *, study: str | None = None,
         samples_needed=int(need.astype(int).max()) if len(need) else None,
         upper_bounds=limits.groupby("scenario")["ci_high"].max() if "ci_high" in limits
         else pd.Series(dtype=float),
-        utilisation=utilisation, margins=margins(utilisation))
+        utilisation=utilisation, margins=margins(utilisation),
+        target=float(evaluated["target_probability"].dropna().iloc[0])
+        if evaluated["target_probability"].notna().any() else DEFAULT_TARGET_PROBABILITY)
 
 
 def _scenarios(evaluated: pd.DataFrame, extremes: pd.DataFrame | None,
@@ -154,15 +164,66 @@ def _scenarios(evaluated: pd.DataFrame, extremes: pd.DataFrame | None,
 
 # --- formatting -----------------------------------------------------------------------------------
 
-def probability_text(p: float) -> str:
-    """A probability or bound as every page writes it: 3 significant digits, exponent below 1e-3."""
-    if p == 0:
-        return "0"
-    return f"{p:.3g}" if p >= 1e-3 else f"{p:.2e}"
+def _ci(row, prefix: str = "") -> str:
+    return (f"[{probability_text(row[prefix + 'ci_low'])}, "
+            f"{probability_text(row[prefix + 'ci_high'])}]")
 
 
-def _ci(row) -> str:
-    return f"[{probability_text(row['ci_low'])}, {probability_text(row['ci_high'])}]"
+def _finite(value) -> bool:
+    try:
+        return bool(np.isfinite(float(value)))
+    except (TypeError, ValueError):
+        return False
+
+
+def _beta_text(beta) -> str:
+    """The reliability index beta = -Phi^-1(P) as the pages write it (∞ at P = 0)."""
+    try:
+        b = float(beta)
+    except (TypeError, ValueError):
+        return "β n/a"
+    return "β = ∞" if b == np.inf else (f"β = {b:.2f}" if np.isfinite(b) else "β n/a")
+
+
+def target_rst(summary: StudySummary) -> list[str]:
+    """'Target probability': the count of limit-scenario pairs met / not shown / not met and the
+    verdict of every pair not met or not shown (in words, with P, interval and method)."""
+    t = probability_text(summary.target)
+    n = len(summary.limits)
+    met, short, failed = (summary.verdicts(v) for v in (MET, NOT_SHOWN, NOT_MET))
+    out = [f"Target P < {t} per passage (limits.target_probability; shown met only when the "
+           f"interval's upper end is below it): met for {len(met)}, not shown for {len(short)}, "
+           f"not met for {len(failed)} of {n} limit-scenario pairs.", ""]
+    for _, r in pd.concat([failed, short]).iterrows():
+        out.append(f"- {_escape(r['description'])}, scenario ``{r['scenario']}``: "
+                   f"{_escape(r['target_text'])}.")
+    return out + [""]
+
+
+def stated_text(row) -> str:
+    """The probability a page states for a limit (the estimate its target verdict rests on:
+    counting when a sample exceeds, else the tail model), its interval, beta, the method and the
+    number of runs, with the other estimate beside it."""
+    n = int(row["n_samples"])
+    counting = f"{int(row['n_exceed'])} of {n} runs exceed"
+    tail = _finite(row.get("tail_probability"))
+    if row.get("verdict_basis") == "tail" and tail:
+        return (f"P = {probability_text(row['tail_probability'])} {_ci(row, 'tail_')}, "
+                f"{_beta_text(row['tail_reliability_index'])} ({row['tail_model']} tail, {n} "
+                f"runs; counting: {counting}, P < {probability_text(row['ci_high'])})")
+    out = (f"P = {probability_text(row['probability'])} {_ci(row)}, "
+           f"{_beta_text(row.get('reliability_index'))} (counting, {counting})")
+    if tail:
+        out += (f"; {row['tail_model']} tail: {probability_text(row['tail_probability'])} "
+                f"{_ci(row, 'tail_')}")
+    return out
+
+
+def _stated_cell(row) -> str:
+    """P [CI] of the stated estimate, marked 'tail' when the tail model gives it."""
+    if row.get("verdict_basis") == "tail" and _finite(row.get("tail_probability")):
+        return f"{probability_text(row['tail_probability'])} {_ci(row, 'tail_')} (tail)"
+    return f"{probability_text(row['probability'])} {_ci(row)}"
 
 
 def _heading(text: str, char: str) -> str:
@@ -218,9 +279,9 @@ def limit_text(row) -> str:
 
 
 def _p_cell(row) -> str:
-    if not np.isfinite(row.get("probability", np.nan)):
+    if not _finite(row.get("probability", np.nan)):
         return "n/a"
-    return f"{probability_text(row['probability'])} {_ci(row)}"
+    return _stated_cell(row)
 
 
 def margins_rst(summary: StudySummary) -> str:
@@ -263,7 +324,8 @@ def utilisation_html(summary: StudySummary) -> str:
                      P_utilisation_gt_1=[_p_cell(r) for _, r in u.iterrows()])[
         ["scenario", "section", "profile", "index", "clause", "category", "limit", "n_samples",
          "median_utilisation", "p95_utilisation", "max_utilisation", "max_sample_index",
-         "max_value", "P_utilisation_gt_1", "method", "status", "limit_source"]] if len(u) else u
+         "max_value", "P_utilisation_gt_1", "method", "tail_method", "target_text", "status",
+         "limit_source"]] if len(u) else u
     return table_html(shown, "Utilisation of the limits per scenario and index",
                       "utilisation = processed index / limit (docs/assessment.md); weighted median "
                       "and 95th percentile over the samples; max_value in SI units (index name); "
@@ -322,6 +384,12 @@ def main_page_rst(summary: StudySummary, *, details: str = SUMMARY_CATEGORY) -> 
     out.append("")
     verdict = "Yes" if summary.insufficient.empty else "No"
     out.append(f"**Did the samples suffice? {verdict}**, {_sufficiency_text(summary)}")
+    if len(summary.limits):
+        n = len(summary.limits)
+        counts = ", ".join(f"{v} {len(summary.verdicts(v))}" for v in (MET, NOT_SHOWN, NOT_MET))
+        out += ["", f"**Target P < {probability_text(summary.target)} per passage** "
+                f"(limits.target_probability, decided on the interval's upper end): {counts} of "
+                f"{n} limit-scenario pairs."]
     out += ["", f"Table per limit and scenario, grades, sources: category *{details}*."]
     return "\n".join(out) + "\n"
 
@@ -351,6 +419,8 @@ def compact_page_rst(summary: StudySummary, *, intro: str,
     out += ["", "Did the number of samples suffice?", "-" * 34, ""]
     verdict = "**Yes**," if summary.insufficient.empty else "**No**"
     out.append(f"{verdict} {_sufficiency_text(summary, '; ')}")
+    if len(summary.limits):
+        out += ["", "Target probability", "-" * 18, ""] + target_rst(summary)
     if len(summary.skipped):
         out += ["", f"Not evaluated: {', '.join(sorted(summary.skipped['limit'].unique()))} (see "
                 "the full summary)."]
@@ -375,9 +445,23 @@ def _matrix_rst(summary: StudySummary) -> list[str]:
                 continue
             r = by.loc[s]
             mark = "" if r["sufficient"] else " \\*"
-            out.append(f"     - {probability_text(r['probability'])} {_ci(r)}{mark}")
-    out += ["", "\\* the number of samples did not suffice.", ""]
+            out.append(f"     - {_stated_cell(r)}{mark}")
+    out += ["", "\\* the number of samples did not suffice; (tail): no sample exceeded, the "
+            "extreme-value tail model gives P.", ""]
     return out
+
+
+def _tail_cell(r) -> str:
+    """P, interval and method of the tail model, or why there is none."""
+    if _finite(r.get("tail_probability")):
+        flag = "; extrapolated far beyond the data" if r.get("tail_extrapolation") else ""
+        gof = (f"; A² = {float(r['tail_gof_statistic']):.2f}"
+               + (f", p = {float(r['tail_gof_pvalue']):.2f}" if _finite(r.get("tail_gof_pvalue"))
+                  else "") if _finite(r.get("tail_gof_statistic")) else "")
+        return (f"{probability_text(r['tail_probability'])} {_ci(r, 'tail_')} "
+                f"({_escape(r['tail_method'])}{gof}{flag})")
+    status = r.get("tail_status")
+    return _escape(status) if isinstance(status, str) else "n/a"
 
 
 def _exceedance_line(r, pct: str) -> str:
@@ -429,7 +513,13 @@ def _details(summary: StudySummary) -> list[str]:
             out.append(f"Ride-quality grades: no, for {len(short)} of {m} grade-scenario pairs:\n")
             out += _verdict_lines(short)
 
+    if len(summary.limits):
+        out.append(_heading("Target probability", "-"))
+        out += target_rst(summary)
+
     out.append(_heading("All limits", "-"))
+    out.append("P stated: the counting estimate when a sample exceeded, else the extreme-value "
+               "tail model of the per-sample maxima (docs/reliability.md §9); β = −Φ⁻¹(P).\n")
     for scenario, block in summary.evaluated.groupby("scenario", sort=True):
         sizes = summary.scenarios.loc[scenario]
         size = f"{int(sizes['n_samples'])} samples"
@@ -437,10 +527,17 @@ def _details(summary: StudySummary) -> list[str]:
             size += f", effective {sizes['n_effective']:.1f} (weighted)"
         out.append(f"Scenario ``{scenario}`` ({size}).\n")
         rows = [[_escape(r["description"]), _escape(r["threshold"]), str(int(r["n_exceed"])),
-                 probability_text(r["probability"]), _ci(r), "yes" if r["sufficient"] else "no",
-                 _escape(r["source"])] for _, r in block.iterrows()]
-        out.append(_list_table(["Index", "Limit", "Exceeding samples", "P(exceed)", f"{pct} CI",
-                                "Samples sufficed", "Source"], rows, [22, 14, 9, 9, 14, 8, 24]))
+                 probability_text(r["probability"]), _ci(r), _tail_cell(r),
+                 _beta_text(r["tail_reliability_index"] if r.get("verdict_basis") == "tail"
+                            else r.get("reliability_index")),
+                 _escape(r.get("target_verdict") if isinstance(r.get("target_verdict"), str)
+                         else "n/a"),
+                 "yes" if r["sufficient"] else "no", _escape(r["source"])]
+                for _, r in block.iterrows()]
+        out.append(_list_table(["Index", "Limit", "Exceeding samples", "P(exceed), counting",
+                                f"{pct} CI", f"P(exceed), tail model [{pct}]", "β of P stated",
+                                "Target", "Samples sufficed", "Source"], rows,
+                               [18, 11, 7, 8, 12, 18, 6, 6, 6, 16]))
     if not summary.skipped.empty:
         out.append(_heading("Not evaluated", "-"))
         for _, r in summary.skipped.iterrows():
@@ -515,12 +612,17 @@ def rst_to_html(rst: str, title: str) -> str:
 def reliability_html(assessment: pd.DataFrame) -> str:
     """``report/reliability.html``: the exceedance table per scenario and limit."""
     shown = assessment[["scenario", "limit", "threshold", "n_samples", "n_exceed", "probability",
-                        "ci_low", "ci_high", "sufficient", "status", "source"]
-                       ] if "probability" in assessment else assessment
+                        "ci_low", "ci_high", "reliability_index", "tail_probability",
+                        "tail_ci_low", "tail_ci_high", "tail_reliability_index", "tail_method",
+                        "tail_gof_statistic", "tail_gof_pvalue", "tail_status", "target_text",
+                        "sufficient", "status", "source"]
+                       ] if "tail_probability" in assessment else assessment
     return table_html(
         shown, "Exceedance probabilities per scenario and limit",
-        "P(max index > limit) with two-sided confidence intervals; 'sufficient': the sample-size "
-        "criterion of limits.sufficiency.")
+        "P(max index > limit) with two-sided confidence intervals: counting (probability, ci_*) "
+        "and the extreme-value tail model (tail_*); reliability_index = -Phi^-1(P); "
+        "target_text: the target verdict; 'sufficient': the sample-size criterion of "
+        "limits.sufficiency.")
 
 
 def table1_html(table1: pd.DataFrame) -> str:

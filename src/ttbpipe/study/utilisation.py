@@ -27,6 +27,7 @@ import pandas as pd
 
 from ..assessment.columns import OTHER_SECTION, SECTIONS, AssessedIndex, display_name
 from ..stats.limits import ConstantLimit
+from ..stats.reliability import TAIL_COLUMNS, VERDICT_COLUMNS
 from ..stats.tables import weighted_quantile
 
 #: The utilisation at which an index reaches its limit.
@@ -34,11 +35,14 @@ AT_LIMIT = 1.0
 #: Percentile of the utilisation the report states besides the median and the maximum.
 UPPER_PERCENTILE = 0.95
 
+#: Tail estimate and target verdict of P(utilisation > 1), from the reliability table.
+RELIABILITY_EXTRA = (*TAIL_COLUMNS, *VERDICT_COLUMNS)
+
 TABLE_COLUMNS = ("scenario", "section", "profile", "index", "standard", "clause", "category",
                  "unit", "n_samples", "median_utilisation", "p95_utilisation", "max_utilisation",
                  "max_sample_index", "max_value", "limit_low", "limit_high", "limit_source",
                  "probability", "ci_low", "ci_high", "upper_one_sided", "n_exceed", "method",
-                 "confidence_level", "sufficient", "status")
+                 "confidence_level", "sufficient", "status", *RELIABILITY_EXTRA)
 
 
 def limit_name(a: AssessedIndex) -> str:
@@ -88,7 +92,8 @@ def utilisation_table(extremes: pd.DataFrame, indices: Sequence[AssessedIndex],
                 "limit_source": a.limit_source,
                 **{c: rel.get(c, np.nan) for c in ("probability", "ci_low", "ci_high",
                                                    "upper_one_sided", "n_exceed", "method",
-                                                   "confidence_level", "sufficient", "status")},
+                                                   "confidence_level", "sufficient", "status",
+                                                   *RELIABILITY_EXTRA)},
             })
     return pd.DataFrame(rows, columns=list(TABLE_COLUMNS))
 

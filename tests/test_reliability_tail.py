@@ -1,0 +1,237 @@
+"""Extreme-value tail model (ttbpipe.reliability.tail) against exact answers.
+
+Samples come from distributions whose maxima are exactly GEV (Gumbel, Fréchet-type GEV) or whose
+tail above any threshold is exactly GPD (exponential, generalised Pareto), drawn from scipy.stats
+with fixed seeds; exact tail probabilities from the same scipy distributions' ``sf``.
+"""
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from ttbpipe.reliability.tail import (TailNotEstimable, TailSettings, _weighted_ad,
+                                      estimate_tail, reliability_index)
+from ttbpipe.stats.limits import ConstantLimit, LimitContext
+from ttbpipe.stats.reliability import (MET, NOT_MET, NOT_SHOWN, ReliabilitySettings,
+                                       assess_limits, target_verdict)
+
+FAST = TailSettings(gof_bootstrap=0)
+
+
+def _coverage(dist, n, p, settings, reps):
+    z = float(dist.isf(p))
+    hits = 0
+    for seed in range(reps):
+        x = dist.rvs(size=n, random_state=np.random.default_rng(seed))
+        est = estimate_tail(x, z, settings=settings)
+        hits += est.ci_low <= p <= est.ci_high
+    return hits / reps
+
+
+def test_gev_interval_contains_exact_gumbel_tail_probability():
+    # Gumbel maxima, n = 300, exact P = 1e-5 at z = gumbel_r.isf(1e-5); source: scipy.stats.
+    x = stats.gumbel_r.rvs(loc=2.0, scale=0.3, size=300, random_state=np.random.default_rng(1))
+    z = stats.gumbel_r.isf(1e-5, loc=2.0, scale=0.3)
+    est = estimate_tail(x, z)
+    assert est.ci_low <= 1e-5 <= est.ci_high
+    assert 1e-7 < est.probability < 1e-3                     # estimate within two decades
+    assert abs(est.shape) < 0.2                               # Gumbel: xi = 0
+    assert est.method.startswith("GEV, MLE, profile-likelihood 95 %")
+    assert est.n_evaluations == 300 and np.isfinite(est.gof_statistic)
+    assert 0.05 <= est.gof_pvalue <= 1.0                      # the true model is not rejected
+    assert est.reliability_index == pytest.approx(stats.norm.isf(est.probability))
+
+
+def test_gev_profile_interval_coverage_gumbel():
+    # 200 replications, n = 300, exact P = 1e-4. Nominal 0.95; binomial sd 0.015, so >= 0.88
+    # is 4.6 sd below nominal (measured: docs/reliability.md §9).
+    cov = _coverage(stats.gumbel_r, 300, 1e-4, FAST, 200)
+    assert cov >= 0.88, cov
+
+
+def test_gev_interval_heavy_tail_frechet_type():
+    # GEV with xi = 0.2 (scipy c = -0.2), exact P = 1e-5; 40 replications: the interval
+    # contains it at least 34 times (binomial P(X <= 33 | 40, 0.95) = 0.014).
+    dist = stats.genextreme(-0.2, loc=1.0, scale=0.5)
+    z = float(dist.isf(1e-5))
+    hits, shapes = 0, []
+    for seed in range(40):
+        est = estimate_tail(dist.rvs(size=300, random_state=np.random.default_rng(seed)), z,
+                            settings=FAST)
+        hits += est.ci_low <= 1e-5 <= est.ci_high
+        shapes.append(est.shape)
+    assert hits >= 34, hits
+    assert np.mean(shapes) == pytest.approx(0.2, abs=0.06)   # xi recovered, with scipy's c = -xi
+
+
+def test_pot_interval_coverage_exponential():
+    # Exponential: the excess over any threshold is exactly GPD(xi = 0); n = 500, P = 1e-5.
+    # 100 replications; >= 0.87 is 3.6 binomial sd below 0.95.
+    cov = _coverage(stats.expon, 500, 1e-5, TailSettings(model="pot", gof_bootstrap=0), 100)
+    assert cov >= 0.87, cov
+
+
+def test_pot_generalised_pareto_tail():
+    # GPD(xi = 0.2) samples: exact tail above any threshold; P = 1e-5.
+    dist = stats.genpareto(0.2)
+    z = float(dist.isf(1e-5))
+    est = estimate_tail(dist.rvs(size=500, random_state=np.random.default_rng(7)), z,
+                        settings=TailSettings(model="pot"))
+    assert est.ci_low <= 1e-5 <= est.ci_high
+    assert est.threshold == pytest.approx(dist.ppf(0.8), rel=0.15)   # the 0.8 quantile
+    assert est.zeta == pytest.approx(0.2, abs=1e-9) and est.n_exceedances == 100
+    assert est.method.startswith("POT (GPD above the 0.8 quantile, 100 exceedances)")
+
+
+def test_importance_weights_recover_target_tail():
+    # Target Gumbel(0, 1); proposal Gumbel(1, 1) (shifted towards the tail); weights
+    # w = f_target / f_proposal. Exact target P = 1e-4 at z = gumbel_r.isf(1e-4).
+    rng = np.random.default_rng(3)
+    x = stats.gumbel_r.rvs(loc=1.0, size=400, random_state=rng)
+    w = stats.gumbel_r.pdf(x) / stats.gumbel_r.pdf(x, loc=1.0)
+    z = stats.gumbel_r.isf(1e-4)
+    weighted = estimate_tail(x, z, w, FAST)
+    plain = estimate_tail(x, z, None, FAST)
+    assert weighted.ci_low <= 1e-4 <= weighted.ci_high
+    assert "weighted MLE" in weighted.method and "sandwich-adjusted" in weighted.method
+    # the weighted fit describes the target (location 0), the unweighted one the proposal
+    # (location 1); tolerance 0.25, about 4 standard errors of the location at n = 400
+    assert weighted.location == pytest.approx(0.0, abs=0.25)
+    assert plain.location == pytest.approx(1.0, abs=0.25)
+    assert weighted.probability != pytest.approx(plain.probability, rel=0.5)
+
+
+def test_bootstrap_interval_is_deterministic_and_contains_exact():
+    x = stats.gumbel_r.rvs(size=300, random_state=np.random.default_rng(11))
+    z = stats.gumbel_r.isf(1e-4)
+    s = TailSettings(interval="bootstrap", n_bootstrap=60, gof_bootstrap=0, seed=5)
+    a, b = estimate_tail(x, z, settings=s), estimate_tail(x, z, settings=s)
+    assert (a.ci_low, a.ci_high, a.cov) == (b.ci_low, b.ci_high, b.cov)
+    assert a.ci_low <= 1e-4 <= a.ci_high and np.isfinite(a.cov) and a.cov > 0
+    assert "bootstrap 95 % (60 resamples, seed 5)" in a.method
+
+
+def test_weighted_anderson_darling_equals_classical_formula():
+    # Anderson & Darling (1954): A^2 = -n - sum (2i-1)/n [ln u_i + ln(1 - u_(n+1-i))]; 1e-10.
+    u = np.random.default_rng(0).random(57)
+    s = np.sort(u)
+    i = np.arange(1, 58)
+    classical = -57 - np.sum((2 * i - 1) / 57 * (np.log(s) + np.log1p(-s[::-1])))
+    assert _weighted_ad(u, np.ones(57)) == pytest.approx(classical, rel=1e-10)
+    assert _weighted_ad(u, np.full(57, 3.0)) == pytest.approx(classical, rel=1e-10)
+
+
+def test_far_extrapolation_is_flagged():
+    x = stats.gumbel_r.rvs(size=100, random_state=np.random.default_rng(2))
+    est = estimate_tail(x, stats.gumbel_r.isf(1e-7), settings=FAST)
+    assert est.extrapolation and "extrapolation far beyond the data" in est.status
+    near = estimate_tail(x, stats.gumbel_r.isf(0.02), settings=FAST)
+    assert not near.extrapolation and near.status == "fitted"
+
+
+@pytest.mark.parametrize("x, message", [
+    (np.arange(10.0), "fewer than the 20"),
+    (np.full(50, 0.3), "all 50 maxima are equal"),
+    (np.r_[np.random.default_rng(0).gumbel(size=49), np.nan], "1 of 50 maxima are not finite"),
+    (np.repeat([0.1, 0.2, 0.3], 20), "only 3 distinct values"),
+])
+def test_degenerate_samples_give_a_reason(x, message):
+    with pytest.raises(TailNotEstimable, match=message):
+        estimate_tail(x, 1.0)
+
+
+def test_bounded_maxima_below_the_regular_shape_are_refused():
+    # Reverse Weibull with xi = -0.8 (scipy c = 0.8): the MLE is not regular (Smith 1985).
+    x = stats.genextreme.rvs(0.8, size=300, random_state=np.random.default_rng(4))
+    with pytest.raises(TailNotEstimable, match="shape xi"):
+        estimate_tail(x, 2.0, settings=FAST)
+
+
+def test_invalid_arguments():
+    x = np.random.default_rng(0).gumbel(size=50)
+    with pytest.raises(ValueError, match="weights"):
+        estimate_tail(x, 1.0, np.r_[np.ones(49), -1.0])
+    with pytest.raises(ValueError, match="tail model"):
+        TailSettings(model="gumbel")
+    with pytest.raises(TailNotEstimable, match="POT threshold"):
+        estimate_tail(x, -5.0, settings=TailSettings(model="pot"))
+
+
+def test_tail_and_wilson_intervals_overlap_where_counting_resolves_p():
+    # n = 2000, limit at the exact 0.95 quantile (P = 0.05): the counting estimate resolves p,
+    # and the GEV and POT intervals overlap the Wilson interval (Wilson 1927).
+    x = stats.gumbel_r.rvs(size=2000, random_state=np.random.default_rng(8))
+    z = stats.gumbel_r.isf(0.05)
+    k = int((x > z).sum())
+    wilson = stats.binomtest(k, 2000).proportion_ci(method="wilson")
+    for model in ("gev", "pot"):
+        est = estimate_tail(x, z, settings=TailSettings(model=model, gof_bootstrap=0))
+        assert est.ci_low <= wilson.high and wilson.low <= est.ci_high, (model, est)
+        assert est.probability == pytest.approx(0.05, rel=0.25)
+
+
+def _extremes(values, speeds=None):
+    n = len(values)
+    df = pd.DataFrame({"scenario": "a", "sample_index": np.arange(n), "weight": 1.0,
+                       "max_derailment_coefficient": values})
+    return df
+
+
+def test_assess_limits_adds_tail_columns_and_verdict():
+    x = stats.gumbel_r.rvs(loc=0.3, scale=0.03, size=300, random_state=np.random.default_rng(5))
+    lim = ConstantLimit("q_p", "max_derailment_coefficient", 0.8, "1", "test", "Q/P")
+    low = ConstantLimit("q_p_low", "max_derailment_coefficient", 0.3, "1", "test", "Q/P low")
+    table = assess_limits(_extremes(x), [lim, low], LimitContext(),
+                          ReliabilitySettings(tail=FAST, target_probability=1e-4))
+    far, near = table.iloc[0], table.iloc[1]
+    assert far["n_exceed"] == 0 and far["verdict_basis"] == "tail"
+    # Gumbel(0.3, 0.03) at 0.8: exact P = 5.8e-8, beta = 5.3; the interval is below 1e-4
+    assert far["tail_ci_low"] <= stats.gumbel_r.sf(0.8, 0.3, 0.03) <= far["tail_ci_high"]
+    assert far["target_verdict"] == MET and far["target_text"].startswith("met: P = ")
+    assert "(GEV tail, 300 runs)" in far["target_text"] and "of the raw index" in far["tail_method"]
+    assert far["reliability_index"] == np.inf          # counting P = 0
+    assert near["verdict_basis"] == "counting" and near["target_verdict"] == NOT_MET
+    assert near["reliability_index"] == pytest.approx(stats.norm.isf(near["probability"]))
+
+
+def test_varying_thresholds_fit_the_utilisation():
+    from ttbpipe.stats.limits import SpeedDependentLimit
+    rng = np.random.default_rng(6)
+    ext = pd.DataFrame({"scenario": "a", "sample_index": np.arange(300), "weight": 1.0,
+                        "max_wheel_unloading_ratio": stats.gumbel_r.rvs(0.3, 0.04, size=300,
+                                                                        random_state=rng),
+                        "train_speed_m_s": rng.choice([40.0, 50.0], 300)})
+    lim = SpeedDependentLimit("wu", "max_wheel_unloading_ratio", 0.65, 0.8, 160.0, "1", "t", "wu")
+    row = assess_limits(ext, [lim], settings=ReliabilitySettings(tail=FAST)).iloc[0]
+    assert "of index / per-sample threshold" in row["tail_method"]
+    assert np.isfinite(row["tail_probability"])
+
+
+def test_target_verdict_not_shown_when_interval_straddles():
+    row = {"n_exceed": 0, "n_samples": 300, "probability": 0.0, "ci_low": 0.0, "ci_high": 0.0126,
+           "tail_probability": 1e-5, "tail_ci_low": 1e-7, "tail_ci_high": 8e-5,
+           "tail_model": "GEV", "tail_method": "GEV", "tail_extrapolation": False}
+    v = target_verdict(row, 2.7e-5)
+    assert v["target_verdict"] == NOT_SHOWN
+    assert v["target_text"].startswith("not shown: the interval's upper end 8.00e-05 exceeds")
+    grade = {**row, "tail_probability": np.nan, "tail_status": "no tail estimate: too few"}
+    v = target_verdict(grade, 2.7e-5)
+    assert v["verdict_basis"] == "counting" and "no tail estimate: too few" in v["target_text"]
+
+
+def test_degenerate_column_gives_tail_status_in_table():
+    table = assess_limits(_extremes(np.full(50, 0.2)),
+                          [ConstantLimit("q", "max_derailment_coefficient", 0.8, "1", "t", "Q/P")],
+                          settings=ReliabilitySettings(tail=FAST))
+    assert table.iloc[0]["tail_status"].startswith("no tail estimate: all 50 maxima are equal")
+    assert np.isnan(table.iloc[0]["tail_probability"])
+
+
+def test_settings_from_config():
+    s = ReliabilitySettings.from_config({"confidence_level": 0.9, "target_probability": 1e-6,
+                                         "tail": {"model": "pot", "threshold_quantile": 0.9}})
+    assert s.target_probability == 1e-6 and s.tail.model == "pot"
+    assert s.tail.threshold_quantile == 0.9 and s.tail.confidence_level == 0.9
+    assert ReliabilitySettings().target_probability == pytest.approx(1 / 36500)
+    assert reliability_index(0.5) == pytest.approx(0.0) and reliability_index(0.0) == np.inf
