@@ -14,7 +14,6 @@ from typing import Callable
 import numpy as np
 
 from .. import streams
-from ..stats.reliability import BinomialExceedance
 from .result import FailureProbability
 
 __all__ = ["monte_carlo_points", "monte_carlo"]
@@ -51,6 +50,9 @@ def monte_carlo(g: Callable[[np.ndarray], np.ndarray], n_dims: int, *, seed: int
                 n_samples: int = 10_000, batch_size: int = 10_000,
                 confidence_level: float = 0.95, interval: str = "wilson") -> FailureProbability:
     """Crude Monte Carlo: ``n_samples`` points, evaluated ``batch_size`` at a time."""
+    # imported here: ttbpipe.stats.reliability imports this package's tail model
+    from ..stats.reliability import BinomialExceedance
+
     if n_samples < 1 or batch_size < 1:
         raise ValueError("n_samples and batch_size must be >= 1")
     failed = np.empty(int(n_samples), dtype=bool)

@@ -19,11 +19,13 @@ __all__ = ["FailureProbability", "reliability_index", "lognormal_interval"]
 def reliability_index(probability: float) -> float:
     """Generalised reliability index ``beta = -Phi^-1(p)`` (EN 1990 Annex C, eq. C.1).
 
-    ``+inf`` at p = 0, ``-inf`` at p = 1 (``scipy.stats.norm.isf`` keeps full precision for
-    small p, where ``-ppf(p)`` would too, but ``ppf(1 - p)`` would not).
+    ``+inf`` at p = 0, ``-inf`` at p = 1, NaN for NaN (a table row without an estimate)
+    (``scipy.stats.norm.isf`` keeps full precision for small p, where ``ppf(1 - p)`` would not).
     """
     p = float(probability)
-    if not 0.0 <= p <= 1.0 or np.isnan(p):
+    if np.isnan(p):
+        return float("nan")
+    if not 0.0 <= p <= 1.0:
         raise ValueError(f"probability must lie in [0, 1], got {probability!r}")
     return float(stats.norm.isf(p))
 

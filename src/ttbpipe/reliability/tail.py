@@ -61,6 +61,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..stats.tables import weighted_quantile
+from .result import reliability_index
 
 MODELS = ("gev", "pot")
 INTERVALS = ("profile", "bootstrap")
@@ -159,12 +160,6 @@ class TailEstimate:
     @property
     def reliability_index(self) -> float:
         return reliability_index(self.probability)
-
-
-def reliability_index(p: float) -> float:
-    """``beta = -Phi^-1(p) = Phi^-1(1 - p)`` (EN 1990 Annex C, eq. C.7), inf at p = 0, nan for nan."""
-    p = float(p)
-    return float(stats.norm.isf(p)) if np.isfinite(p) else np.nan
 
 
 # --- models ------------------------------------------------------------------------------------
