@@ -115,3 +115,25 @@ def test_population_spectrum_draws_the_level_from_the_fits(tmp_path):
     digest = settings_digest(config, "carbody_vertical_acc", "v", [str(path)])
     pd.concat(rows[:-1] + [rows[-1].assign(psd_mm2_m=rows[-1]["psd_mm2_m"] * 2)]).to_parquet(path)
     assert settings_digest(config, "carbody_vertical_acc", "v", [str(path)]) != digest
+
+
+def test_rare_event_table_gives_the_verdict_and_the_ordinary_estimates(uninterrupted):
+    from ttbpipe.reliability.study import RARE_EVENT_COLUMNS, rare_event_table, rare_events_html
+    from ttbpipe.stats.reliability import interval_verdict
+
+    out, row = uninterrupted
+    reliability = pd.DataFrame([{
+        "scenario": "2025-12-15", "limit": "carbody_vertical_acc", "probability": 0.0,
+        "ci_low": 0.0, "ci_high": 0.012, "n_samples": 300, "verdict_basis": "tail",
+        "tail_probability": 2e-3, "tail_ci_low": 1e-4, "tail_ci_high": 0.02}])
+    table = rare_event_table([out], reliability, {"target_probability": 1e-3})
+    assert list(table.columns) == list(RARE_EVENT_COLUMNS)
+    r = table.iloc[0]
+    expected = interval_verdict(row.iloc[0]["probability"], row.iloc[0]["ci_low"],
+                                row.iloc[0]["ci_high"], 1e-3,
+                                f"subset simulation, {row.iloc[0]['n_evaluations']} runs")
+    assert (r["target_verdict"], r["target_text"]) == expected
+    assert r["ordinary_estimates"] == "2025-12-15: 0.002 [1.00e-04, 0.02] (tail, 300 runs)"
+    assert "Rare events" in rare_events_html(table)
+    empty = rare_event_table([], reliability, None)
+    assert empty.empty and list(empty.columns) == list(RARE_EVENT_COLUMNS)

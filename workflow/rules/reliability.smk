@@ -11,10 +11,10 @@ SUBSET = _subset_resolve(config)
 
 
 def subset_targets() -> list[str]:
-    """The subset-simulation estimates of the configured limits (none when disabled)."""
+    """The rare-event table and page of the configured limits (none when disabled)."""
     if not SUBSET["enabled"]:
         return []
-    return expand(results_path("study/subset/{limit}.parquet"), limit=SUBSET["limits"])
+    return [results_path("study/rare_events.parquet")]
 
 
 def subset_inputs(wildcards) -> list[str]:
@@ -42,3 +42,24 @@ rule subset_simulation:
         log_path("study/subset/{limit}.log"),
     script:
         "../scripts/subset_simulation.py"
+
+
+rule rare_events:
+    """The subset-simulation estimates with their target verdicts, beside the ordinary
+    scenarios' estimates of the same limits (report page)."""
+    input:
+        subset=expand(results_path("study/subset/{limit}.parquet"), limit=SUBSET["limits"]),
+        reliability=results_path("study/reliability.parquet"),
+    output:
+        table=results_path("study/rare_events.parquet"),
+        page=report(
+            results_path("study/report/rare_events.html"),
+            caption="../report/rare_events.rst",
+            category="4. Reliability",
+        ),
+    params:
+        limits=config.get("limits"),
+    log:
+        log_path("study/rare_events.log"),
+    script:
+        "../scripts/rare_events.py"

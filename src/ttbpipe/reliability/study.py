@@ -38,8 +38,8 @@ from .subset import SubsetSettings, SubsetSimulation
 
 log = logging.getLogger(__name__)
 
-__all__ = ["resolve_subset", "subset_inputs", "run_subset_limit", "RESULT_COLUMNS",
-           "SCENARIO_LABEL"]
+__all__ = ["resolve_subset", "subset_inputs", "run_subset_limit", "rare_event_table",
+           "rare_events_html", "RESULT_COLUMNS", "RARE_EVENT_COLUMNS", "SCENARIO_LABEL"]
 
 #: Scenario label of the subset-simulation estimates in the reliability tables.
 SCENARIO_LABEL = "subset"
@@ -178,6 +178,58 @@ def run_subset_limit(config: Mapping[str, Any], limit_name: str, out: str | os.P
     os.replace(levels_path.with_name(levels_path.name + ".tmp"), levels_path)
     log.info("%s: %s", limit_name, result)
     return table
+
+
+RARE_EVENT_COLUMNS = (*RESULT_COLUMNS, "target_probability", "target_verdict", "target_text",
+                      "ordinary_estimates")
+
+
+def rare_event_table(subset_paths: Sequence[str | os.PathLike[str]],
+                     reliability: pd.DataFrame | None = None,
+                     limits_section: Mapping[str, Any] | None = None) -> pd.DataFrame:
+    """The subset-simulation estimates with their target verdicts and, for the cross-check, the
+    estimate each ordinary scenario of the reliability table states for the same limit (the
+    counting one, or the tail model's when no sample exceeds; ``verdict_basis``)."""
+    from ..stats.reliability import ReliabilitySettings, interval_verdict, probability_text
+
+    target = ReliabilitySettings.from_config(limits_section).target_probability
+    frames = [pd.read_parquet(p) for p in subset_paths]
+    table = (pd.concat(frames, ignore_index=True) if frames
+             else pd.DataFrame(columns=list(RESULT_COLUMNS)))
+    rows = []
+    for _, r in table.iterrows():
+        verdict, text = interval_verdict(r["probability"], r["ci_low"], r["ci_high"], target,
+                                         f"subset simulation, {int(r['n_evaluations'])} runs")
+        others = []
+        if reliability is not None and "verdict_basis" in reliability:
+            same = reliability[(reliability["limit"] == r["limit"])
+                               & reliability["probability"].notna()]
+            for _, o in same.iterrows():
+                tail = o["verdict_basis"] == "tail"
+                p, lo, hi = ((o["tail_probability"], o["tail_ci_low"], o["tail_ci_high"]) if tail
+                             else (o["probability"], o["ci_low"], o["ci_high"]))
+                others.append(f"{o['scenario']}: {probability_text(p)} [{probability_text(lo)}, "
+                              f"{probability_text(hi)}] ({'tail' if tail else 'counting'}, "
+                              f"{int(o['n_samples'])} runs)")
+        rows.append({**r.to_dict(), "target_probability": target, "target_verdict": verdict,
+                     "target_text": text, "ordinary_estimates": "; ".join(others)})
+    return pd.DataFrame(rows, columns=list(RARE_EVENT_COLUMNS))
+
+
+def rare_events_html(table: pd.DataFrame) -> str:
+    """The report page of the subset-simulation estimates."""
+    from ..study.report_pages import table_html
+
+    shown = table[["limit", "threshold", "probability", "ci_low", "ci_high", "cov",
+                   "reliability_index", "n_evaluations", "n_dims", "n_levels", "target_text",
+                   "ordinary_estimates"]]
+    note = ("Subset simulation of the coupled model (Au & Beck 2001) for each configured limit: "
+            "probability per passage, its confidence interval (lognormal, Au & Beck c.o.v.), "
+            "the reliability index beta = -Phi^-1(P), the number of coupled runs and the "
+            "dimension of the standard-normal input; the verdict compares the interval with the "
+            "target probability (limits.target_probability). The last column gives, for the "
+            "cross-check, the estimate of every ordinary scenario for the same limit.")
+    return table_html(shown, "Rare events: subset simulation", note)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -381,6 +381,21 @@ def tail_columns(values: np.ndarray, thresholds: np.ndarray, weights: np.ndarray
             "tail_status": est.status}
 
 
+def interval_verdict(p: float, lo: float, hi: float, target: float, how: str) -> tuple[str, str]:
+    """(verdict, sentence) of an estimate ``p [lo, hi]`` against a target probability: **met**
+    when the interval's upper end is below the target, **not met** when its lower end is above
+    it, else **not shown**. ``how`` names the method and the runs, e.g. "GEV tail, 300 runs"."""
+    stated = f"P = {probability_text(p)} [{probability_text(lo)}, {probability_text(hi)}]"
+    t = probability_text(target)
+    if hi < target:
+        return MET, f"{MET}: {stated} < target {t} ({how})"
+    if lo > target:
+        return NOT_MET, (f"{NOT_MET}: the interval's lower end {probability_text(lo)} "
+                         f"exceeds the target {t}; {stated} ({how})")
+    return NOT_SHOWN, (f"{NOT_SHOWN}: the interval's upper end {probability_text(hi)} "
+                       f"exceeds the target {t}; {stated} ({how})")
+
+
 def target_verdict(row: Mapping[str, Any], target: float) -> dict[str, Any]:
     """Target verdict of one reliability row (the :data:`VERDICT_COLUMNS`).
 
@@ -399,16 +414,7 @@ def target_verdict(row: Mapping[str, Any], target: float) -> dict[str, Any]:
     else:
         p, lo, hi = row["probability"], row["ci_low"], row["ci_high"]
         how = f"counting, {k} of {n} runs exceed"
-    stated = f"P = {probability_text(p)} [{probability_text(lo)}, {probability_text(hi)}]"
-    t = probability_text(target)
-    if hi < target:
-        verdict, text = MET, f"{MET}: {stated} < target {t} ({how})"
-    elif lo > target:
-        verdict, text = NOT_MET, (f"{NOT_MET}: the interval's lower end {probability_text(lo)} "
-                                  f"exceeds the target {t}; {stated} ({how})")
-    else:
-        verdict, text = NOT_SHOWN, (f"{NOT_SHOWN}: the interval's upper end {probability_text(hi)} "
-                                    f"exceeds the target {t}; {stated} ({how})")
+    verdict, text = interval_verdict(p, lo, hi, target, how)
     if basis == "counting" and k == 0:
         text += f"; {row.get('tail_status', 'no tail estimate')}"
     if basis == "tail" and row.get("tail_extrapolation"):
