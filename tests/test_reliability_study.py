@@ -6,7 +6,7 @@ structure (probability inside its interval, evaluations = N + (levels - 1) (N - 
 run killed mid-level leaves no output and resumes to the same numbers bit for bit, that the
 estimate does not depend on the number of worker processes, and that the rule exists in the
 workflow. Accuracy of the estimator itself: tests/test_reliability_estimators.py (exact
-references); on the coupled model against Monte Carlo: docs/reliability.md §10.
+references); on the coupled model against Monte Carlo: docs/reliability.md §11.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-# Stage: rare-event reliability (docs/reliability.md §9). With study.scenarios.subset enabled,
+# Stage: rare-event reliability (docs/reliability.md §10). With study.scenarios.subset enabled,
 # one job per configured limit runs subset simulation of the coupled model in standard-normal
 # space (ttbpipe.reliability.study). The job evaluates each chain step's points in `threads`
 # worker processes and saves the estimator's state after every step
