@@ -137,3 +137,16 @@ def test_rare_event_table_gives_the_verdict_and_the_ordinary_estimates(uninterru
     assert "Rare events" in rare_events_html(table)
     empty = rare_event_table([], reliability, None)
     assert empty.empty and list(empty.columns) == list(RARE_EVENT_COLUMNS)
+
+
+def test_dask_executor_gives_the_same_estimate(uninterrupted, tmp_path):
+    """simulation.executor: dask (a LocalCluster of two single-threaded workers): the same
+    numbers as the local run, bit for bit."""
+    pytest.importorskip("distributed")
+    _, reference = uninterrupted
+    config = copy.deepcopy(CONFIG)
+    config["simulation"]["executor"] = "dask"
+    config["simulation"]["dask"] = {"local_workers": 2}
+    row = run_subset_limit(config, "carbody_vertical_acc", tmp_path / "c.parquet")
+    columns = [c for c in RESULT_COLUMNS if c != "wall_time_s"]
+    pd.testing.assert_frame_equal(row[columns], reference[columns], check_exact=True)

@@ -69,7 +69,10 @@ class CoupledLimitState:
     :func:`ttbpipe.study.samples.build_case`); ``index``: a column of the extremes table
     (``max_wheel_unloading_ratio``, an assessed ``<profile>_<index>`` column...); ``limit``:
     its limit (same unit), or a function of the run's extremes row giving it (a threshold that
-depends on the train speed or the static axle load). ``workers`` processes evaluate a batch (1: in this process). Every
+depends on the train speed or the static axle load). ``executor='local'``: ``workers``
+processes evaluate a batch (1: in this process); ``'dask'``: the points go to the study's Dask
+cluster (``simulation.dask``: the scheduler at ``$TTBPIPE_DASK_SCHEDULER`` or
+``dask.scheduler``, else a LocalCluster; :func:`ttbpipe.study.batch.dask_client`). Every
     evaluated row is kept in :attr:`evaluations` (u's index in call order, all indices), so
     that one set of runs can serve several thresholds and the tail model.
     """
@@ -79,6 +82,8 @@ depends on the train speed or the static axle load). ``workers`` processes evalu
     index: str
     limit: float | Callable[[Mapping[str, float]], float]
     workers: int = 1
+    executor: str = "local"
+    dask: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if not callable(self.limit) and not (np.isfinite(self.limit) and self.limit > 0):
@@ -86,12 +91,17 @@ depends on the train speed or the static axle load). ``workers`` processes evalu
         self.n_dims = int(self.input_map.n_dims)
         self.evaluations: list[dict[str, float]] = []
         self._pool: ProcessPoolExecutor | None = None
+        self._dask: tuple | None = None
+        if self.executor not in ("local", "dask"):
+            raise ValueError(f"executor {self.executor!r}; expected local | dask")
 
     def rows(self, points: np.ndarray) -> list[dict[str, float]]:
         """The extremes row of each point (runs in parallel when ``workers`` > 1)."""
         points = np.atleast_2d(np.asarray(points, dtype=float))
         if points.shape[1] != self.n_dims:
             raise ValueError(f"points of dimension {points.shape[1]}, the inputs have {self.n_dims}")
+        if self.executor == "dask":
+            return self._rows_dask(points)
         if self.workers <= 1:
             return [run_point(self.case, self.input_map, u) for u in points]
         if self._pool is None:
@@ -100,6 +110,19 @@ depends on the train speed or the static axle load). ``workers`` processes evalu
                 initargs=(self.case, self.input_map))
         return list(self._pool.map(_worker_run, list(points),
                                    chunksize=max(1, len(points) // (4 * self.workers))))
+
+    def _rows_dask(self, points: np.ndarray) -> list[dict[str, float]]:
+        if self._dask is None:
+            from ..study.batch import dask_client
+
+            client, cluster = dask_client(self.dask)
+            # the case and the inputs map go to the workers once, not with every point
+            case, input_map = client.scatter([dict(self.case), self.input_map], broadcast=True)
+            self._dask = (client, cluster, case, input_map)
+        client, _, case, input_map = self._dask
+        futures = client.map(run_point, [case] * len(points), [input_map] * len(points),
+                             list(points), pure=False)
+        return client.gather(futures)
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         rows = self.rows(points)
@@ -117,6 +140,12 @@ depends on the train speed or the static axle load). ``workers`` processes evalu
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
+        if self._dask is not None:
+            client, cluster = self._dask[:2]
+            client.close()
+            if cluster is not None:
+                cluster.close()
+            self._dask = None
 
     def __enter__(self) -> "CoupledLimitState":
         return self
@@ -127,6 +156,7 @@ depends on the train speed or the static axle load). ``workers`` processes evalu
     def __getstate__(self):
         state = dict(self.__dict__)
         state["_pool"] = None
+        state["_dask"] = None
         return state
 
 

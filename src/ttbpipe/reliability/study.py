@@ -4,11 +4,13 @@
 simulation (:mod:`ttbpipe.reliability.subset`) of ``g(u) = 1 - index / limit`` with the study's
 coupled model (train, structure, run settings of ``simulation:``), its random inputs a function
 of standard normals (:class:`ttbpipe.reliability.inputs.StandardNormalInputs`: Gaussian
-irregularity of ``simulation.irregularity.spectrum``, and the fields of ``condition``), seeded
-by the study seed. Each chain step's points are evaluated in worker processes; the estimator's
-state is saved after every ask and every tell (temporary file + rename), so a killed run resumes
-where it stopped and gives the same estimate as an uninterrupted one. The result is one row
-(:data:`RESULT_COLUMNS`) plus the levels table.
+irregularity with its spectral level drawn from the latest campaign's PSD population, or the
+standard spectrum of ``simulation.irregularity.spectrum``; the fields of ``condition``), seeded
+by the study seed. Each chain step's points are evaluated in worker processes, or on the study's
+Dask cluster (``simulation.executor: dask``); the estimator's state is saved after every ask
+and every tell (temporary file + rename), so a killed run resumes where it stopped and gives the
+same estimate as an uninterrupted one. The result is one row (:data:`RESULT_COLUMNS`) plus the
+levels table; :func:`rare_event_table` adds the target verdicts for the report.
 
 Runs outside Snakemake too::
 
@@ -152,8 +154,11 @@ def run_subset_limit(config: Mapping[str, Any], limit_name: str, out: str | os.P
     log.info("%s: subset simulation in %d standard-normal dimensions (%s)", limit_name,
              inputs.n_dims, inputs.describe())
     t0 = time.time()
-    with CoupledLimitState(_case(config, inputs), inputs, limit.column, threshold,
-                           workers) as g:
+    from ..study.samples import resolve_simulation
+
+    sim = resolve_simulation(config.get("simulation"))
+    with CoupledLimitState(_case(config, inputs), inputs, limit.column, threshold, workers,
+                           executor=sim["executor"], dask=sim.get("dask")) as g:
         while not sus.done:
             points = sus.ask()
             sus.save(state_path)
