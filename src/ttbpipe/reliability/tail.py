@@ -63,7 +63,9 @@ from scipy import optimize, stats
 from ..stats.tables import weighted_quantile
 from .result import reliability_index
 
-MODELS = ("gev", "pot")
+MODELS = ("gev", "pot", "gumbel")
+#: models for records shorter than ``min_samples`` (``short_record_model``)
+SHORT_RECORD_MODELS = ("gumbel", "none")
 INTERVALS = ("profile", "bootstrap")
 
 #: Below this |xi| the Gumbel / exponential limit of the formulas is used.
@@ -88,6 +90,8 @@ class TailSettings:
     limit whose return period exceeds that multiple of the largest observation's;
     ``gof_bootstrap`` replications give the goodness-of-fit p-value (0: statistic only);
     ``n_bootstrap`` replications for ``interval='bootstrap'``; ``seed`` makes both deterministic.
+    A GEV record shorter than ``min_samples`` (but of at least ``min_samples_short``) is fitted
+    with ``short_record_model``: the two-parameter Gumbel (``'gumbel'``, default) or none.
     19 goodness-of-fit replications keep a study's tables fast; their smallest p-value, 0.05, is
     what flags a poor fit (raise it for a finer p-value).
     """
@@ -97,6 +101,8 @@ class TailSettings:
     min_exceedances: int = 30
     min_samples: int = 20
     min_distinct: int = 10
+    short_record_model: str = "gumbel"
+    min_samples_short: int = 8
     confidence_level: float = 0.95
     interval: str = "profile"
     n_bootstrap: int = 200
@@ -116,6 +122,12 @@ class TailSettings:
             raise ValueError(f"confidence_level must be in (0, 1), got {self.confidence_level}")
         if self.min_samples < 5 or self.min_exceedances < 5:
             raise ValueError("min_samples and min_exceedances must be at least 5")
+        if self.short_record_model not in SHORT_RECORD_MODELS:
+            raise ValueError(f"short_record_model must be one of {SHORT_RECORD_MODELS}, got "
+                             f"{self.short_record_model!r}")
+        if not 5 <= self.min_samples_short <= self.min_samples:
+            raise ValueError(f"min_samples_short must be in [5, min_samples = {self.min_samples}], "
+                             f"got {self.min_samples_short}")
         if not -1.0 < self.min_shape <= 0.0:
             raise ValueError(f"min_shape must be in (-1, 0], got {self.min_shape}")
 
@@ -244,6 +256,57 @@ class _GEV:
 
     def shape(self, theta) -> float:
         return float(theta[2])
+
+
+class _Gumbel(_GEV):
+    """Gumbel (the GEV with xi = 0) of the maxima; theta = (mu, log sigma) on standardised data.
+
+    The two-parameter model for short records, where the GEV shape is not identifiable (Coles
+    2001 §3.4 and §2.6.7: the Gumbel as the GEV restricted to xi = 0; with fewer than about 20
+    maxima the shape's profile interval spans every plausible value). For the light tails of
+    the coupled model's maxima (fitted xi of -0.1 to -0.2, docs/reliability.md §11) the Gumbel
+    overstates the exceedance probability: a conservative extrapolation.
+    """
+
+    name = "Gumbel"
+
+    def logf(self, theta) -> np.ndarray:
+        mu, lsig = theta
+        y = (self.x - mu) / np.exp(lsig)
+        return -lsig - y - np.exp(-y)            # Coles 2001 eq. 3.9 (xi -> 0)
+
+    def log_p(self, theta, z: float) -> float:
+        mu, lsig = theta
+        s = np.exp(-(z - mu) / np.exp(lsig))     # -log G(z)
+        return float(np.log(-np.expm1(-s))) if s > 0 else -np.inf
+
+    def from_logp(self, lp: float, free, z: float):
+        (lsig,) = free
+        if not lp < 0.0:
+            return None
+        big_l = np.log(-np.log1p(-np.exp(lp)))
+        return np.array([z + np.exp(lsig) * big_l, lsig])
+
+    def starts(self) -> list[np.ndarray]:
+        m = np.average(self.x, weights=self.a)
+        sd = np.sqrt(np.average((self.x - m) ** 2, weights=self.a))
+        sig = np.sqrt(6.0) * sd / np.pi         # method of moments (Coles 2001 §3.3.2)
+        return [np.array([m - _EULER_GAMMA * sig, np.log(sig)])]
+
+    def pit(self, theta) -> tuple[np.ndarray, np.ndarray]:
+        mu, lsig = theta
+        return stats.gumbel_r.cdf(self.x, loc=mu, scale=np.exp(lsig)), self.a
+
+    def simulate(self, theta, size: int, rng) -> "_Gumbel":
+        mu, lsig = theta
+        x = stats.gumbel_r.rvs(loc=mu, scale=np.exp(lsig), size=size, random_state=rng)
+        return _Gumbel(x, np.ones(size), self.xi_min)
+
+    def resample(self, idx) -> "_Gumbel":
+        return _Gumbel(self.x[idx], self.a[idx], self.xi_min)
+
+    def shape(self, theta) -> float:
+        return 0.0
 
 
 class _POT:
@@ -435,16 +498,19 @@ def _check_data(x, weights, settings: TailSettings) -> tuple[np.ndarray, np.ndar
     bad = ~np.isfinite(x)
     if bad.any():
         raise TailNotEstimable(f"{int(bad.sum())} of {x.size} maxima are not finite (NaN or inf)")
-    if x.size < settings.min_samples:
-        raise TailNotEstimable(f"{x.size} samples, fewer than the {settings.min_samples} a tail "
-                               "fit needs (limits.tail.min_samples)")
+    short = settings.model in ("gev", "gumbel") and settings.short_record_model == "gumbel"
+    needed = settings.min_samples_short if short else settings.min_samples
+    if x.size < needed:
+        raise TailNotEstimable(f"{x.size} samples, fewer than the {needed} a tail fit needs "
+                               "(limits.tail.min_samples" + ("_short" if short else "") + ")")
     distinct = np.unique(x).size
     if distinct == 1:
         raise TailNotEstimable(f"all {x.size} maxima are equal ({x[0]:.6g}): zero variance, "
                                "no tail to fit")
-    if distinct < settings.min_distinct:
+    if distinct < min(settings.min_distinct, x.size):
         raise TailNotEstimable(f"only {distinct} distinct values among {x.size} maxima (fewer "
-                               f"than {settings.min_distinct}): the maxima are not continuous")
+                               f"than {min(settings.min_distinct, x.size)}): the maxima are not "
+                               "continuous")
     return x, w / w.mean()
 
 
@@ -481,10 +547,21 @@ def estimate_tail(x, limit: float, weights=None,
     centre, spread = float(np.median(x)), float(np.std(x))
     xs, zs = (x - centre) / spread, (limit - centre) / spread
     level = settings.confidence_level
-    if settings.model == "gev":
+    model_name = settings.model
+    if model_name == "gev" and x.size < settings.min_samples:
+        model_name = "gumbel"      # _check_data let it through: short_record_model is gumbel
+        short_note = (f" (xi = 0: {x.size} samples, fewer than the {settings.min_samples} the "
+                      "GEV shape needs)")
+    else:
+        short_note = ""
+    if model_name == "gev":
         model = _GEV(xs, a, settings.min_shape)
         threshold = np.nan
         label = "GEV"
+    elif model_name == "gumbel":
+        model = _Gumbel(xs, a, settings.min_shape)
+        threshold = np.nan
+        label = "Gumbel" + short_note
     else:
         us = (_pot_threshold(x, a, settings) - centre) / spread
         if zs <= us:
@@ -566,7 +643,7 @@ def estimate_tail(x, limit: float, weights=None,
                    + (f": {ratio:.3g} x" if np.isfinite(ratio) and p_hat > 0 else "") + ")")
     for note in notes:
         status += f"; {note}"
-    if settings.model == "gev":
+    if model_name in ("gev", "gumbel"):
         loc, zeta, n_exc = centre + spread * theta[0], np.nan, n
     else:
         loc = threshold
@@ -574,7 +651,7 @@ def estimate_tail(x, limit: float, weights=None,
         n_exc = int(model.above.sum())
     return TailEstimate(
         limit=limit, probability=p_hat, ci_low=low, ci_high=high, cov=cov, n_evaluations=n,
-        model=settings.model,
+        model=model_name,
         method=f"{label}, {'weighted ' if weighted else ''}MLE, {how}",
         gof_statistic=gof, gof_pvalue=gof_p, gof_method=gof_how, extrapolation=extrapolation,
         status=status, location=float(loc), scale=float(spread * np.exp(theta[1])),
@@ -590,9 +667,13 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
     is p = 0 the upper end is approached from ``lp_top`` (log p at the largest observation)."""
     fixed = np.asarray(free_hat, float)
     warm = [fixed]
-    grid = [fixed + np.array([ds, 0.0]) for ds in (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)]
-    grid += [np.array([fixed[0] + ds, xi]) for ds in (-2.0, -1.0, 0.0, 1.0)
-             for xi in (0.0, 0.1, 0.3, max(model.xi_min, -0.2))]
+    steps = (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)
+    if fixed.size == 1:      # Gumbel: the scale is the only other parameter
+        grid = [fixed + ds for ds in steps]
+    else:
+        grid = [fixed + np.array([ds, 0.0]) for ds in steps]
+        grid += [np.array([fixed[0] + ds, xi]) for ds in (-2.0, -1.0, 0.0, 1.0)
+                 for xi in (0.0, 0.1, 0.3, max(model.xi_min, -0.2))]
 
     def prof(lp):
         fun = lambda f: _nll(model, model.from_logp(lp, f, z))
@@ -697,7 +778,7 @@ def _gof_pvalue(model, theta, statistic: float, n_eff: float, settings: TailSett
     """Parametric-bootstrap p-value of the Anderson-Darling statistic at Kish's effective size
     (exact resampling scheme for equal weights, approximate for weighted samples)."""
     b = settings.gof_bootstrap
-    what = "Anderson-Darling A² of the fitted " + ("GEV" if isinstance(model, _GEV) else
+    what = "Anderson-Darling A² of the fitted " + (model.name if isinstance(model, _GEV) else
                                                    "GPD of the excesses")
     if b <= 0:
         return np.nan, what + "; no p-value (limits.tail.gof_bootstrap = 0)"
