@@ -636,7 +636,9 @@ def estimate_tail(x, limit: float, weights=None,
                                           and ratio > settings.extrapolation_factor))
     status = "fitted"
     if p_hat == 0.0:
-        status += "; the limit lies beyond the fitted upper end point of the maxima"
+        status += ("; the limit lies beyond the fitted upper end point of the maxima"
+                   if model.shape(theta) < 0 else
+                   "; P at the limit is below the smallest representable probability")
     if extrapolation:
         status += (f"; extrapolation far beyond the data (return period > "
                    f"{settings.extrapolation_factor:g} x that of the largest observation"

@@ -351,6 +351,10 @@ class ReliabilitySettings:
                    tail=TailSettings.from_config(section.get("tail"), confidence_level=level))
 
 
+#: How the pages name each tail model.
+TAIL_MODEL_NAMES = {"gev": "GEV", "pot": "POT", "gumbel": "Gumbel"}
+
+
 def tail_columns(values: np.ndarray, thresholds: np.ndarray, weights: np.ndarray,
                  settings: TailSettings, category: str = "limit") -> dict[str, Any]:
     """The :data:`TAIL_COLUMNS` of one (scenario, limit): the tail model of the raw index when
@@ -372,7 +376,7 @@ def tail_columns(values: np.ndarray, thresholds: np.ndarray, weights: np.ndarray
         est = estimate_tail(x, z, weights, settings)
     except TailNotEstimable as exc:
         return {**empty, "tail_status": f"no tail estimate: {exc}"}
-    return {"tail_model": est.model.upper(), "tail_probability": est.probability, "tail_ci_low": est.ci_low,
+    return {"tail_model": TAIL_MODEL_NAMES[est.model], "tail_probability": est.probability, "tail_ci_low": est.ci_low,
             "tail_ci_high": est.ci_high, "tail_cov": est.cov,
             "tail_reliability_index": est.reliability_index,
             "tail_n_evaluations": est.n_evaluations, "tail_method": f"{est.method}, {of}",

@@ -222,6 +222,8 @@ def stated_text(row) -> str:
 def _stated_cell(row) -> str:
     """P [CI] of the stated estimate, marked 'tail' when the tail model gives it."""
     if row.get("verdict_basis") == "tail" and _finite(row.get("tail_probability")):
+        if row["tail_probability"] == 0.0:   # below what the fit can represent: its bound
+            return f"< {probability_text(row['tail_ci_high'])} (tail)"
         return f"{probability_text(row['tail_probability'])} {_ci(row, 'tail_')} (tail)"
     return f"{probability_text(row['probability'])} {_ci(row)}"
 
