@@ -102,7 +102,7 @@ class TailSettings:
     min_samples: int = 20
     min_distinct: int = 10
     short_record_model: str = "gumbel"
-    min_samples_short: int = 8
+    min_samples_short: int = 5
     confidence_level: float = 0.95
     interval: str = "profile"
     n_bootstrap: int = 200
