@@ -389,7 +389,8 @@ def interval_verdict(p: float, lo: float, hi: float, target: float, how: str) ->
     """(verdict, sentence) of an estimate ``p [lo, hi]`` against a target probability: **met**
     when the interval's upper end is below the target, **not met** when its lower end is above
     it, else **not shown**. ``how`` names the method and the runs, e.g. "GEV tail, 300 runs"."""
-    stated = f"P = {probability_text(p)} [{probability_text(lo)}, {probability_text(hi)}]"
+    stated = (f"P < {probability_text(hi)}" if p == 0.0 and lo == 0.0 else
+              f"P = {probability_text(p)} [{probability_text(lo)}, {probability_text(hi)}]")
     t = probability_text(target)
     if hi < target:
         return MET, f"{MET}: {stated} < target {t} ({how})"

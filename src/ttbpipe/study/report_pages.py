@@ -208,23 +208,28 @@ def stated_text(row) -> str:
     counting = f"{int(row['n_exceed'])} of {n} runs exceed"
     tail = _finite(row.get("tail_probability"))
     if row.get("verdict_basis") == "tail" and tail:
-        return (f"P = {probability_text(row['tail_probability'])} {_ci(row, 'tail_')}, "
+        return (f"P {'= ' if row['tail_probability'] > 0 else ''}{_tail_p(row)}, "
                 f"{_beta_text(row['tail_reliability_index'])} ({row['tail_model']} tail, {n} "
                 f"runs; counting: {counting}, P < {probability_text(row['ci_high'])})")
     out = (f"P = {probability_text(row['probability'])} {_ci(row)}, "
            f"{_beta_text(row.get('reliability_index'))} (counting, {counting})")
     if tail:
-        out += (f"; {row['tail_model']} tail: {probability_text(row['tail_probability'])} "
-                f"{_ci(row, 'tail_')}")
+        out += f"; {row['tail_model']} tail: {_tail_p(row)}"
     return out
+
+
+def _tail_p(row) -> str:
+    """The tail estimate and interval; P = 0 (the limit beyond what the fit represents) as its
+    interval's upper end, ``< U``."""
+    if row["tail_probability"] == 0.0:
+        return f"< {probability_text(row['tail_ci_high'])}"
+    return f"{probability_text(row['tail_probability'])} {_ci(row, 'tail_')}"
 
 
 def _stated_cell(row) -> str:
     """P [CI] of the stated estimate, marked 'tail' when the tail model gives it."""
     if row.get("verdict_basis") == "tail" and _finite(row.get("tail_probability")):
-        if row["tail_probability"] == 0.0:   # below what the fit can represent: its bound
-            return f"< {probability_text(row['tail_ci_high'])} (tail)"
-        return f"{probability_text(row['tail_probability'])} {_ci(row, 'tail_')} (tail)"
+        return f"{_tail_p(row)} (tail)"
     return f"{probability_text(row['probability'])} {_ci(row)}"
 
 
@@ -460,7 +465,7 @@ def _tail_cell(r) -> str:
         gof = (f"; A² = {float(r['tail_gof_statistic']):.2f}"
                + (f", p = {float(r['tail_gof_pvalue']):.2f}" if _finite(r.get("tail_gof_pvalue"))
                   else "") if _finite(r.get("tail_gof_statistic")) else "")
-        return (f"{probability_text(r['tail_probability'])} {_ci(r, 'tail_')} "
+        return (f"{_tail_p(r)} "
                 f"({_escape(r['tail_method'])}{gof}{flag})")
     status = r.get("tail_status")
     return _escape(status) if isinstance(status, str) else "n/a"
