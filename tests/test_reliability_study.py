@@ -133,7 +133,7 @@ def test_rare_event_table_gives_the_verdict_and_the_ordinary_estimates(uninterru
                                 row.iloc[0]["ci_high"], 1e-3,
                                 f"subset simulation, {row.iloc[0]['n_evaluations']} runs")
     assert (r["target_verdict"], r["target_text"]) == expected
-    assert r["ordinary_estimates"] == "2025-12-15: 0.002 [1.00e-04, 0.02] (tail, 300 runs)"
+    assert r["ordinary_estimates"] == "2025-12-15: 0.002 [1.00e-04, 0.02] (tail), 300 runs"
     assert "Rare events" in rare_events_html(table)
     empty = rare_event_table([], reliability, None)
     assert empty.empty and list(empty.columns) == list(RARE_EVENT_COLUMNS)

@@ -45,7 +45,7 @@ from ..channels import SPECTRAL_CHANNELS
 from .spectra import TrackSpectrum, get_spectrum
 from .synthesis import gaussian_band_frequencies, gaussian_channel_from_normals, fft_grid
 
-__all__ = ["GaussianIrregularityModel", "ordinate_normal_scores", "level_quantiles",
+__all__ = ["GaussianIrregularityModel", "standard_normal_point", "ordinate_normal_scores", "level_quantiles",
            "frequency_score_plateau"]
 
 #: families of the per-frequency fits this module can invert (tipm.distribution.FAMILIES)
@@ -136,6 +136,17 @@ def frequency_score_plateau(scores: np.ndarray, min_lag: int = 3) -> np.ndarray:
         i, j = np.triu_indices(corr.shape[0], k=int(min_lag))
         out[c] = float(np.mean(corr[i, j]))
     return out
+
+
+def standard_normal_point(u: np.ndarray, n_dims: int) -> np.ndarray:
+    """``u`` as a float vector of length ``n_dims`` with finite entries, else ValueError (the
+    check of every map from standard-normal space)."""
+    u = np.asarray(u, dtype=float)
+    if u.shape != (n_dims,):
+        raise ValueError(f"u: shape {u.shape}, expected ({n_dims},)")
+    if not np.all(np.isfinite(u)):
+        raise ValueError("u must be finite")
+    return u
 
 
 class GaussianIrregularityModel:
@@ -297,12 +308,7 @@ class GaussianIrregularityModel:
                    frequency_score_correlation=frequency_score_correlation)
 
     def _check(self, u: np.ndarray) -> np.ndarray:
-        u = np.asarray(u, dtype=float)
-        if u.shape != (self.n_dims,):
-            raise ValueError(f"u: shape {u.shape}, expected ({self.n_dims},)")
-        if not np.all(np.isfinite(u)):
-            raise ValueError("u must be finite")
-        return u
+        return standard_normal_point(u, self.n_dims)
 
     def levels(self, u: np.ndarray) -> dict[str, np.ndarray]:
         """Correlated level normals v per fitted channel (one per level band) of u."""

@@ -159,7 +159,3 @@ cluster (``simulation.dask``: the scheduler at ``$TTBPIPE_DASK_SCHEDULER`` or
         state["_dask"] = None
         return state
 
-
-def default_workers() -> int:
-    """Processes for a batch: the cores this process may use."""
-    return max(1, len(os.sched_getaffinity(0)))

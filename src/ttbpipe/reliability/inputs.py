@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from ..configuration import validate_section
-from ..irregularity.gaussian import GaussianIrregularityModel
+from ..irregularity.gaussian import GaussianIrregularityModel, standard_normal_point
 from ..irregularity.spectra import TrackSpectrum
 from ..threads import pinned
 
@@ -161,12 +161,7 @@ class StandardNormalInputs:
         return {k: s.stop - s.start for k, s in self.slices.items()}
 
     def _check(self, u: np.ndarray) -> np.ndarray:
-        u = np.asarray(u, dtype=float)
-        if u.shape != (self.n_dims,):
-            raise ValueError(f"u: shape {u.shape}, expected ({self.n_dims},)")
-        if not np.all(np.isfinite(u)):
-            raise ValueError("u must be finite")
-        return u
+        return standard_normal_point(u, self.n_dims)
 
     def profile(self, u: np.ndarray) -> pd.DataFrame:
         """The irregularity profile of u, chainage from the start of the lead-in (m)."""

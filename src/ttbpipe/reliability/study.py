@@ -195,7 +195,8 @@ def rare_event_table(subset_paths: Sequence[str | os.PathLike[str]],
     """The subset-simulation estimates with their target verdicts and, for the cross-check, the
     estimate each ordinary scenario of the reliability table states for the same limit (the
     counting one, or the tail model's when no sample exceeds; ``verdict_basis``)."""
-    from ..stats.reliability import ReliabilitySettings, interval_verdict, probability_text
+    from ..stats.reliability import ReliabilitySettings, interval_verdict
+    from ..study.report_pages import stated_cell
 
     target = ReliabilitySettings.from_config(limits_section).target_probability
     frames = [pd.read_parquet(p) for p in subset_paths]
@@ -209,13 +210,8 @@ def rare_event_table(subset_paths: Sequence[str | os.PathLike[str]],
         if reliability is not None and "verdict_basis" in reliability:
             same = reliability[(reliability["limit"] == r["limit"])
                                & reliability["probability"].notna()]
-            for _, o in same.iterrows():
-                tail = o["verdict_basis"] == "tail"
-                p, lo, hi = ((o["tail_probability"], o["tail_ci_low"], o["tail_ci_high"]) if tail
-                             else (o["probability"], o["ci_low"], o["ci_high"]))
-                others.append(f"{o['scenario']}: {probability_text(p)} [{probability_text(lo)}, "
-                              f"{probability_text(hi)}] ({'tail' if tail else 'counting'}, "
-                              f"{int(o['n_samples'])} runs)")
+            others = [f"{o['scenario']}: {stated_cell(o)}, {int(o['n_samples'])} runs"
+                      for _, o in same.iterrows()]
         rows.append({**r.to_dict(), "target_probability": target, "target_verdict": verdict,
                      "target_text": text, "ordinary_estimates": "; ".join(others)})
     return pd.DataFrame(rows, columns=list(RARE_EVENT_COLUMNS))

@@ -226,7 +226,7 @@ def _tail_p(row) -> str:
     return f"{probability_text(row['tail_probability'])} {_ci(row, 'tail_')}"
 
 
-def _stated_cell(row) -> str:
+def stated_cell(row) -> str:
     """P [CI] of the stated estimate, marked 'tail' when the tail model gives it."""
     if row.get("verdict_basis") == "tail" and _finite(row.get("tail_probability")):
         return f"{_tail_p(row)} (tail)"
@@ -288,7 +288,7 @@ def limit_text(row) -> str:
 def _p_cell(row) -> str:
     if not _finite(row.get("probability", np.nan)):
         return "n/a"
-    return _stated_cell(row)
+    return stated_cell(row)
 
 
 def margins_rst(summary: StudySummary) -> str:
@@ -452,7 +452,7 @@ def _matrix_rst(summary: StudySummary) -> list[str]:
                 continue
             r = by.loc[s]
             mark = "" if r["sufficient"] else " \\*"
-            out.append(f"     - {_stated_cell(r)}{mark}")
+            out.append(f"     - {stated_cell(r)}{mark}")
     out += ["", "\\* the number of samples did not suffice; (tail): no sample exceeded, the "
             "extreme-value tail model gives P.", ""]
     return out
