@@ -291,6 +291,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         # CA mortar (bridge) or foundation (slab on subgrade), per slab element
         b2 = float(slab_c["width_m"]) ** 2 / 12.0
         h_deck = float(g_c["deck_height_m"])
+        e_track = float(g_c["track_offset_m"])
         sub = cfg["slab_on_subgrade"]
         for j, (xa, xb, da, db, zone) in enumerate(slab_elems):
             if zone == "bridge":
@@ -319,7 +320,8 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                     s, rz, ry, rr = g
                     o = span_dof0[s]
                     idx = list(range(o, o + spans[s].n))
-                    zd, zc = zd + idx, zc + list(-rz)
+                    # the deck under the track's centre line: z + e roll (paper eq. 24)
+                    zd, zc = zd + idx, zc + list(-(rz + e_track * rr))
                     yd, yc = yd + idx, yc + list(-(ry - h_deck * rr))
                     rdofs, rc = rdofs + idx, rc + list(-rr)
                 links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)],

@@ -206,10 +206,12 @@ def deck_monitor_name(side: str, span: int) -> str:
 
 def default_monitors(model) -> list[dict]:
     """At every span's midspan: the left rail, the slab, the girder's shear centre and the deck
-    surface under each rail (vertical under both, lateral under the left: the deck surface's
-    lateral motion is the same under both); every pier."""
+    surface under each rail, at the track's offset ``girder.track_offset_m`` (vertical under
+    both, lateral under the left: the deck surface's lateral motion is the same under both);
+    every pier."""
     out = []
     half_gauge = 0.5 * float(model.config["fastener"]["rail_centre_distance_m"])
+    track = float(model.config["girder"]["track_offset_m"])
     for s, red in enumerate(model.spans):
         x = red.start_m + 0.5 * red.length_m
         if model.packed.n_rails:
@@ -221,8 +223,8 @@ def default_monitors(model) -> list[dict]:
                         "directions": ["z", "y"]})
         out.append({"name": f"girder_span{s + 1}_mid", "kind": "girder", "span": s,
                     "position": 0.5, "directions": ["z", "y"]})
-        for side, e, directions in (("left", half_gauge, ["z", "y"]),
-                                    ("right", -half_gauge, ["z"])):
+        for side, e, directions in (("left", track + half_gauge, ["z", "y"]),
+                                    ("right", track - half_gauge, ["z"])):
             out.append({"name": deck_monitor_name(side, s + 1), "kind": "girder", "span": s,
                         "position": 0.5, "deck_surface": True, "lateral_offset_m": e,
                         "directions": directions})

@@ -117,9 +117,11 @@ def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
 def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
     """(dofs, table (n_steps+1, n)) of generalised girder forces of loads acting on the girder.
 
-    The load's lateral position (rail) is ignored: it acts on the girder axis (Fz, Fy, Mx).
+    The load's rail is ignored: it acts on the track's centre line, ``girder.track_offset_m``
+    to the left of the girder axis, so Fz adds the torque e Fz to Mx (paper eq. 24).
     """
     spans = model.spans
+    e_track = float(model.config["girder"]["track_offset_m"])
     off = model.dof_info["span_dof0"]
     dofs = np.concatenate([np.arange(o, o + s.n) for o, s in zip(off, spans)]).astype(np.int64)
     table = np.zeros((n_steps + 1, dofs.size))
@@ -132,7 +134,8 @@ def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
             for s, red in enumerate(spans):
                 if red.start_m <= x <= red.start_m + red.length_m:
                     rz, ry, rr = red.rows_at(x)
-                    table[step, col0[s]:col0[s + 1]] += rz * F[0] + ry * F[1] + rr * F[2]
+                    table[step, col0[s]:col0[s + 1]] += (rz * F[0] + ry * F[1]
+                                                         + rr * (F[2] + e_track * F[0]))
                     break
     return dofs, table
 

@@ -89,6 +89,10 @@ GIRDER = {
     "max_mode_frequency_hz": 120.0,  # fixed-interface modes kept per span (see docs)
     "min_modes_per_direction": 1,
     "deck_height_m": 1.1,            # girder shear centre to top of deck (CA level) [M]
+    # lateral position of the track's centre line (midway between the rails) from the girder's
+    # shear centre, + to the left (rail 0's side): the seed paper's eq. 24 term B_r - b_s/2;
+    # about 2.5 m for each track of a double-track box girder [V]
+    "track_offset_m": 0.0,
 }
 
 #: Bearings: two per girder end at +- lateral_spacing/2. [V: k, c physics.md section 6]
