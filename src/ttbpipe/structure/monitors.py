@@ -145,7 +145,7 @@ def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
         p = int(spec.get("pier", 0))
         if not 0 <= p < model.dof_info["n_piers"]:
             raise ValueError(f"monitor {name}: pier {p} outside 0..{model.dof_info['n_piers'] - 1}")
-        d = model.dof_info["pier"] + 3 * p
+        d = model.dof_info["pier_top_dof0"][p]        # top: y, z, roll
         return {"y": ([d], np.ones(1)), "z": ([d + 1], np.ones(1)), "roll": ([d + 2], np.ones(1))}
     raise ValueError(f"monitor {name}: kind {kind!r}; expected rail | slab | girder | pier")
 
