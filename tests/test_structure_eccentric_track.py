@@ -104,3 +104,18 @@ def test_default_deck_monitors_sit_under_the_rails_of_the_offset_track(solutions
                if m.get("deck_surface")}
     assert offsets == pytest.approx({"deck_left_span1_mid": 2.5 + half_gauge,
                                      "deck_right_span1_mid": 2.5 - half_gauge})
+
+
+def test_deck_edge_monitors_follow_the_deck_width():
+    """With girder.deck_width_m, the default monitors add both deck edges (vertical), where the
+    roll of an eccentric load shows most: z + (W/2) roll, larger than under the track."""
+    model = build_structure({
+        "layout": {"approach_length_m": APPROACH_M, "spans_m": [SPAN_M],
+                   "approach_track": "slab", "bridge_track": "slab"},
+        "girder": {"track_offset_m": 2.5, "deck_width_m": 12.0}})
+    edges = {m["name"]: m["lateral_offset_m"] for m in default_monitors(model)
+             if m["name"].startswith("deck_edge")}
+    assert edges == {"deck_edge_left_span1_mid": 6.0, "deck_edge_right_span1_mid": -6.0}
+    centred = build_structure({"layout": {"approach_length_m": APPROACH_M, "spans_m": [SPAN_M],
+                                          "approach_track": "slab", "bridge_track": "slab"}})
+    assert not [m for m in default_monitors(centred) if m["name"].startswith("deck_edge")]

@@ -207,11 +207,12 @@ def deck_monitor_name(side: str, span: int) -> str:
 def default_monitors(model) -> list[dict]:
     """At every span's midspan: the left rail, the slab, the girder's shear centre and the deck
     surface under each rail, at the track's offset ``girder.track_offset_m`` (vertical under
-    both, lateral under the left: the deck surface's lateral motion is the same under both);
-    every pier."""
+    both, lateral under the left: the deck surface's lateral motion is the same under both)
+    and, with ``girder.deck_width_m``, at both deck edges (vertical); every pier."""
     out = []
     half_gauge = 0.5 * float(model.config["fastener"]["rail_centre_distance_m"])
     track = float(model.config["girder"]["track_offset_m"])
+    deck_width = model.config["girder"].get("deck_width_m")
     for s, red in enumerate(model.spans):
         x = red.start_m + 0.5 * red.length_m
         if model.packed.n_rails:
@@ -228,6 +229,11 @@ def default_monitors(model) -> list[dict]:
             out.append({"name": deck_monitor_name(side, s + 1), "kind": "girder", "span": s,
                         "position": 0.5, "deck_surface": True, "lateral_offset_m": e,
                         "directions": directions})
+        if deck_width is not None:
+            for side, e in (("left", 0.5 * deck_width), ("right", -0.5 * deck_width)):
+                out.append({"name": f"deck_edge_{side}_span{s + 1}_mid", "kind": "girder",
+                            "span": s, "position": 0.5, "deck_surface": True,
+                            "lateral_offset_m": e, "directions": ["z"]})
     for p in range(model.dof_info["n_piers"]):
         out.append({"name": f"pier{p + 1}", "kind": "pier", "pier": p,
                     "directions": ["z", "y"]})

@@ -93,6 +93,8 @@ GIRDER = {
     # shear centre, + to the left (rail 0's side): the seed paper's eq. 24 term B_r - b_s/2;
     # about 2.5 m for each track of a double-track box girder [V]
     "track_offset_m": 0.0,
+    # deck width (m): with a value, default monitors also at both deck edges (null: none)
+    "deck_width_m": None,
 }
 
 #: Bearings: two per girder end at +- lateral_spacing/2. [V: k, c physics.md section 6]
