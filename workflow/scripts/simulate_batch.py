@@ -31,11 +31,11 @@ def main(snakemake) -> None:
         profiles = {str(rows["kind"].iloc[0]): snakemake.input.profiles}
     if "population" in snakemake.input.keys():   # irregularity_mc (paper case 3's MCM)
         paths = [str(p) for p in snakemake.input.population]
+        # the profile settings of the digest (ttbpipe.study.plan.mc_profile_settings: band,
+        # length, step, amplitudes), so that what ran is what the batch path names
         mc = dict(settings.get("mc_profiles") or {})
-        profiles = {"irregularity_mc": {
-            "psd_paths": paths, "wavelength_band_m": mc.get("wavelength_band_m"),
-            "length_m": mc["length_m"], "dx_m": mc["dx_m"],
-            "date": max(Path(p).stem for p in paths)}}
+        profiles = {"irregularity_mc": {**mc, "psd_paths": paths,
+                                        "date": max(Path(p).stem for p in paths)}}
     simulate_batch(rows, config, profiles, snakemake.output.extremes, snakemake.output.histories,
                    scenario=w.scenario, first=int(w.first), last=int(w.last),
                    settings=settings, settings_digest=w.digest)

@@ -25,7 +25,9 @@ RMS over a profile shorter than the FFT period differs from it by O(1/sqrt(numbe
 random Fourier coefficients X_k = (N/2)·sqrt(G Δn)·(a_k + i b_k), a_k, b_k ~ N(0, 1): the same
 mean power per frequency, but a stationary Gaussian process whose one-realisation variance is
 random (docs/irregularity.md, "Gaussian representation"). The random-phase form stays the
-default (the seed paper's TIPM synthesis).
+default (the seed paper's TIPM synthesis). Configurations choose it with the key ``amplitudes``
+(:data:`AMPLITUDES`): a run's ``irregularity:`` section, the study's ``simulation.irregularity``
+(the mean-spectrum profile) and ``tipm.profiles`` (the TIPM, forecast and Monte Carlo profiles).
 """
 
 from __future__ import annotations
@@ -42,7 +44,8 @@ from .spectra import TrackSpectrum, get_spectrum
 
 __all__ = ["synthesize_channel", "synthesize_profiles", "synthesize_from_psd_table",
            "fft_grid", "psd_table_interpolator", "gaussian_channel_from_normals",
-           "n_gaussian_coefficients", "gaussian_band_frequencies", "AMPLITUDES"]
+           "n_gaussian_coefficients", "gaussian_band_frequencies", "AMPLITUDES",
+           "DEFAULT_AMPLITUDES", "check_amplitudes"]
 
 log = logging.getLogger(__name__)
 
@@ -103,13 +106,27 @@ def _band_psd(psd_mm2_m: Callable[[np.ndarray], np.ndarray], frequencies: np.nda
     return psd
 
 
+#: Representations of the profile (module docstring): deterministic amplitudes with random
+#: phases, or random Gaussian Fourier coefficients. The configuration key ``amplitudes`` of a
+#: run's ``irregularity:`` section and of the study's ``simulation.irregularity`` and
+#: ``tipm.profiles`` takes these names (the schemas' enums are tested against this tuple).
 AMPLITUDES = ("random_phase", "gaussian")
+#: The default: the seed paper's TIPM synthesis (random phases), unchanged bit for bit.
+DEFAULT_AMPLITUDES = AMPLITUDES[0]
+
+
+def check_amplitudes(amplitudes: str, where: str = "amplitudes") -> str:
+    """``amplitudes`` if it is one of :data:`AMPLITUDES`, else ValueError naming ``where`` (the
+    key) and the choices."""
+    if amplitudes not in AMPLITUDES:
+        raise ValueError(f"{where}: {amplitudes!r}; expected one of {AMPLITUDES}")
+    return amplitudes
 
 
 def synthesize_channel(psd_mm2_m: Callable[[np.ndarray], np.ndarray], length_m: float,
                        dx_m: float, rng: np.random.Generator | int | None,
                        wavelength_band_m: tuple[float, float] = (2.0, 200.0), *,
-                       amplitudes: str = "random_phase") -> np.ndarray:
+                       amplitudes: str = DEFAULT_AMPLITUDES) -> np.ndarray:
     """One random profile in mm, samples at chainage 0, dx, ..., covering ``length_m``.
 
     Parameters
@@ -133,8 +150,7 @@ def synthesize_channel(psd_mm2_m: Callable[[np.ndarray], np.ndarray], length_m: 
 
     Convention: module docstring (numpy ``irfft``, X_k = (N/2)·sqrt(2 G Δn)·e^{iφ}).
     """
-    if amplitudes not in AMPLITUDES:
-        raise ValueError(f"amplitudes: {amplitudes!r}; expected one of {AMPLITUDES}")
+    check_amplitudes(amplitudes)
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     if amplitudes == "gaussian":
         normals = rng.standard_normal(n_gaussian_coefficients(length_m, dx_m, wavelength_band_m))
@@ -206,7 +222,7 @@ def gaussian_channel_from_normals(psd_mm2_m: Callable[[np.ndarray], np.ndarray],
 def synthesize_profiles(spectrum: TrackSpectrum | str, length_m: float, dx_m: float = 0.25,
                         seed: int | None = None, rng: np.random.Generator | None = None,
                         wavelength_band_m: tuple[float, float] | None = None, *,
-                        amplitudes: str = "random_phase") -> pd.DataFrame:
+                        amplitudes: str = DEFAULT_AMPLITUDES) -> pd.DataFrame:
     """Four independent channels of a standard spectrum, as a table.
 
     Columns ``chainage_m, vertical_mm, alignment_mm, cross_level_mm, gauge_mm``; chainage from 0
@@ -268,7 +284,7 @@ def synthesize_from_psd_table(spatial_frequency_per_m, psd_by_channel: Mapping[s
                               length_m: float, dx_m: float,
                               rng: np.random.Generator | int | None,
                               wavelength_band_m: tuple[float, float] = (2.0, 200.0), *,
-                              amplitudes: str = "random_phase") -> pd.DataFrame:
+                              amplitudes: str = DEFAULT_AMPLITUDES) -> pd.DataFrame:
     """Profiles from tabulated one-sided PSDs (estimated, selected or forecast spectra).
 
     ``psd_by_channel`` maps channel names (any subset of the four spectral channels) to PSD

@@ -63,10 +63,13 @@ def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: flo
                        x_fade_start: float, profile: pd.DataFrame | None = None) -> Irregularity:
     """Rail inputs over [x_start, x_end] from an ``irregularity`` section.
 
-    ``source``: ``synthetic`` (``spectrum``, ``seed``, ``dx_m``), ``file`` (``file``: a profile
-    table on disk), ``none``; or pass ``profile`` (a profile table in memory, x = chainage_m),
-    which takes the place of the source. ``scale`` multiplies every channel, ``channels`` keeps
-    some of them (the others zero), ``fade_in_m`` is the fade-in length.
+    ``source``: ``synthetic`` (``spectrum``, ``seed``, ``dx_m``, ``amplitudes``), ``file``
+    (``file``: a profile table on disk), ``none``; or pass ``profile`` (a profile table in
+    memory, x = chainage_m), which takes the place of the source. ``scale`` multiplies every
+    channel, ``channels`` keeps some of them (the others zero), ``fade_in_m`` is the fade-in
+    length. ``amplitudes``: ``random_phase`` (default, deterministic amplitudes) or
+    ``gaussian`` (random Fourier coefficients, a stationary Gaussian profile;
+    :mod:`ttbpipe.irregularity.synthesis`, docs/irregularity.md "Gaussian representation").
     """
     cfg = dict(cfg or {})
     source = "profile" if profile is not None else cfg.get("source", "synthetic")
@@ -74,10 +77,12 @@ def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: flo
         return no_irregularity()
     dx = float(cfg.get("dx_m", 0.25))
     if source == "synthetic":
-        from .synthesis import synthesize_profiles
+        from .synthesis import DEFAULT_AMPLITUDES, check_amplitudes, synthesize_profiles
         length = x_end - x_start + 2 * dx
+        amplitudes = check_amplitudes(cfg.get("amplitudes", DEFAULT_AMPLITUDES),
+                                      "irregularity.amplitudes")
         prof = synthesize_profiles(cfg.get("spectrum", "tbt3352"), length, dx,
-                                   seed=int(cfg.get("seed", 1)))
+                                   seed=int(cfg.get("seed", 1)), amplitudes=amplitudes)
         chain = prof["chainage_m"].to_numpy(float) + x_start - dx
     elif source in ("file", "profile"):
         if source == "file":

@@ -25,6 +25,7 @@ from .damping import girder_damping_ratio
 from .girder import SpanReduction, hermite_shape, reduce_span
 from .kernels import StructurePacked
 from .layout import Layout, make_layout
+from .pier import PierReduction, pier_from_config
 from .links import LinkAccumulator
 from .matrices import assemble_matrices, ballast_link_rows, pad_link_rows
 
@@ -53,6 +54,7 @@ class StructureModel:
     fixed: np.ndarray                # bool mask of fixed DOFs
     link_kinds: list                 # kind of each CSR link (bearing, pier)
     triple_kinds: list = field(default_factory=list)   # "ca" per triple (pads: pad_*, ballast: bal_*)
+    piers: list = field(default_factory=list)   # PierReduction per pier of a given height
 
     @property
     def n_dof(self) -> int:
@@ -136,8 +138,10 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
     off["ballast"] = n
     n += 2 * ballasted_nodes.size
     n_piers = max(layout.n_spans - 1, 0)
+    tall_piers = pier_c.get("height_m") is not None
     off["pier"] = n
-    n += 3 * n_piers
+    if not tall_piers:
+        n += 3 * n_piers
     n_diag = n
     off["span"] = n
 
@@ -163,6 +167,16 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         spans.append(red)
         span_dof0.append(n)
         n += red.n
+    # piers of a given height: dense reduced blocks after the spans; else 3 lumped DOFs each
+    piers: list[PierReduction] = []
+    pier_top_dof0 = []
+    for p in range(n_piers):
+        if tall_piers:
+            piers.append(pier_from_config(pier_c))
+            pier_top_dof0.append(n)
+            n += piers[-1].n
+        else:
+            pier_top_dof0.append(off["pier"] + 3 * p)
     n_dof = n
     fixed = np.zeros(n_dof, dtype=bool)
     if brg["rigid"]:
@@ -219,9 +233,10 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         mass[sl0 + 1] = float(bal["sleeper_mass_kg"])
         mass[sl0 + 2] = float(bal["sleeper_roll_inertia_kgm2"])
         mass[off["ballast"]:off["ballast"] + 2 * ns] = float(bal["ballast_mass_kg"])
-    p0 = off["pier"] + 3 * np.arange(n_piers)
-    mass[p0] = float(pier_c["mass_kg"]); mass[p0 + 1] = float(pier_c["mass_kg"])
-    mass[p0 + 2] = float(pier_c["roll_inertia_kgm2"])
+    if not tall_piers:
+        p0 = off["pier"] + 3 * np.arange(n_piers)
+        mass[p0] = float(pier_c["mass_kg"]); mass[p0 + 1] = float(pier_c["mass_kg"])
+        mass[p0 + 2] = float(pier_c["roll_inertia_kgm2"])
     if np.any(mass <= 0):
         raise RuntimeError(f"internal: {int(np.sum(mass <= 0))} diagonal DOFs without mass")
     inv_mass = np.zeros(n_dof)
@@ -291,6 +306,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         # CA mortar (bridge) or foundation (slab on subgrade), per slab element
         b2 = float(slab_c["width_m"]) ** 2 / 12.0
         h_deck = float(g_c["deck_height_m"])
+        e_track = float(g_c["track_offset_m"])
         sub = cfg["slab_on_subgrade"]
         for j, (xa, xb, da, db, zone) in enumerate(slab_elems):
             if zone == "bridge":
@@ -319,7 +335,8 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                     s, rz, ry, rr = g
                     o = span_dof0[s]
                     idx = list(range(o, o + spans[s].n))
-                    zd, zc = zd + idx, zc + list(-rz)
+                    # the deck under the track's centre line: z + e roll (paper eq. 24)
+                    zd, zc = zd + idx, zc + list(-(rz + e_track * rr))
                     yd, yc = yd + idx, yc + list(-(ry - h_deck * rr))
                     rdofs, rc = rdofs + idx, rc + list(-rr)
                 links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)],
@@ -335,7 +352,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                 gz, gy, gr = o + 3 * end, o + 3 * end + 1, o + 3 * end + 2
                 pier = s - 1 if end == 0 else s
                 has_pier = 0 <= pier < n_piers
-                pd = off["pier"] + 3 * pier
+                pd = pier_top_dof0[pier] if has_pier else -1
                 for e_b in (eb, -eb):
                     zd, zc = [gz, gr], [1.0, e_b]
                     if has_pier:
@@ -346,7 +363,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                     yd += [pd]; yc += [-1.0]
                 links.add(yd, yc, 2 * float(brg["ky_N_m"]), 2 * float(brg["cy_Ns_m"]),
                           "bearing_y")
-    for p in range(n_piers):
+    for p in range(n_piers if not tall_piers else 0):
         pd = off["pier"] + 3 * p
         links.add([pd], [1.0], pier_c["ky_N_m"], pier_c["cy_Ns_m"], "pier_y")
         links.add([pd + 1], [1.0], pier_c["kz_N_m"], pier_c["cz_Ns_m"], "pier_z")
@@ -355,8 +372,11 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
     # ---- span blocks ----------------------------------------------------------------------------
     mat0, Kf, Cf, Mi = [], [], [], []
     pos = 0
-    for s, red in enumerate(spans):
-        free = ~fixed[span_dof0[s]:span_dof0[s] + red.n]
+    # dense blocks: the girder spans, then the piers of a given height
+    block_dof0 = list(span_dof0) + (pier_top_dof0 if tall_piers else [])
+    blocks = list(spans) + piers
+    for o, red in zip(block_dof0, blocks):
+        free = ~fixed[o:o + red.n]
         minv = np.zeros((red.n, red.n))
         minv[np.ix_(free, free)] = np.linalg.inv(red.M[np.ix_(free, free)])
         mat0.append(pos); pos += red.n * red.n
@@ -375,10 +395,10 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         beam_L=cat(beam_L), beam_EIv=cat(beam_EIv), beam_EIl=cat(beam_EIl),
         beam_GK=cat(beam_GK),
         link_ptr=ptr, link_dof=ldof, link_coef=lcoef, link_k=lk, link_c=lc,
-        span_dof0=np.array(span_dof0, dtype=np.int64),
-        span_n=np.array([red.n for red in spans], dtype=np.int64),
+        span_dof0=np.array(block_dof0, dtype=np.int64),
+        span_n=np.array([red.n for red in blocks], dtype=np.int64),
         span_mat0=np.array(mat0, dtype=np.int64), span_K=cat(Kf), span_C=cat(Cf),
-        span_Minv=cat(Mi), span_scratch=np.zeros(max([red.n for red in spans] + [1])),
+        span_Minv=cat(Mi), span_scratch=np.zeros(max([red.n for red in blocks] + [1])),
         n_rails=2 if has_track else 0, rail_x0=float(layout.rail_x[0]),
         rail_dx=float(layout.rail_x[1] - layout.rail_x[0]), rail_n_nodes=int(n_rn),
         rail_dof0=np.array([0, 5 * n_rn], dtype=np.int64),
@@ -396,11 +416,13 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
         bal_half_gauge=half_gauge,
     )
     info = dict(off, n_diag=n_diag, n_dof=n_dof, span_dof0=span_dof0, n_piers=n_piers,
+                pier_top_dof0=pier_top_dof0, block_dof0=block_dof0,
+                block_mass=[red.M for red in blocks],
                 n_sleepers=int(ballasted_nodes.size), n_rail_nodes=n_rn,
                 slab_node_dof0=slab_node_dof0, span_block_mass=[red.M for red in spans])
     node_a = np.array([e[2] for e in slab_elems], dtype=np.int64)
     return StructureModel(config=cfg, layout=layout, properties=dict(props), packed=packed,
-                          spans=spans, dof_info=info, slab_elements=slab_x,
+                          spans=spans, piers=piers, dof_info=info, slab_elements=slab_x,
                           slab_element_node0=node_a, fixed=fixed,
                           link_kinds=[links.kind[i] for i in links.order],
                           triple_kinds=list(links.tri_kind))

@@ -51,7 +51,9 @@ def component_index_sets(model) -> dict[str, np.ndarray]:
     out = {"rail": np.arange(0, info["slab"]),
            "slab": np.arange(info["slab"], info["sleeper"]),
            "sleeper_ballast": np.arange(info["sleeper"], info["pier"]),
-           "pier": np.arange(info["pier"], info["span"])}
+           "pier": np.concatenate([np.arange(info["pier"], info["span"])]
+                                  + [np.arange(o, o + red.n) for o, red in
+                                     zip(info["pier_top_dof0"], model.piers)]).astype(np.int64)}
     vert, lat, tor = [], [], []
     for o, red in zip(info["span_dof0"], model.spans):
         nv, nl, nt = (f.size for f in red.mode_frequencies_hz)

@@ -145,7 +145,7 @@ def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
         p = int(spec.get("pier", 0))
         if not 0 <= p < model.dof_info["n_piers"]:
             raise ValueError(f"monitor {name}: pier {p} outside 0..{model.dof_info['n_piers'] - 1}")
-        d = model.dof_info["pier"] + 3 * p
+        d = model.dof_info["pier_top_dof0"][p]        # top: y, z, roll
         return {"y": ([d], np.ones(1)), "z": ([d + 1], np.ones(1)), "roll": ([d + 2], np.ones(1))}
     raise ValueError(f"monitor {name}: kind {kind!r}; expected rail | slab | girder | pier")
 
@@ -206,10 +206,13 @@ def deck_monitor_name(side: str, span: int) -> str:
 
 def default_monitors(model) -> list[dict]:
     """At every span's midspan: the left rail, the slab, the girder's shear centre and the deck
-    surface under each rail (vertical under both, lateral under the left: the deck surface's
-    lateral motion is the same under both); every pier."""
+    surface under each rail, at the track's offset ``girder.track_offset_m`` (vertical under
+    both, lateral under the left: the deck surface's lateral motion is the same under both)
+    and, with ``girder.deck_width_m``, at both deck edges (vertical); every pier."""
     out = []
     half_gauge = 0.5 * float(model.config["fastener"]["rail_centre_distance_m"])
+    track = float(model.config["girder"]["track_offset_m"])
+    deck_width = model.config["girder"].get("deck_width_m")
     for s, red in enumerate(model.spans):
         x = red.start_m + 0.5 * red.length_m
         if model.packed.n_rails:
@@ -221,11 +224,16 @@ def default_monitors(model) -> list[dict]:
                         "directions": ["z", "y"]})
         out.append({"name": f"girder_span{s + 1}_mid", "kind": "girder", "span": s,
                     "position": 0.5, "directions": ["z", "y"]})
-        for side, e, directions in (("left", half_gauge, ["z", "y"]),
-                                    ("right", -half_gauge, ["z"])):
+        for side, e, directions in (("left", track + half_gauge, ["z", "y"]),
+                                    ("right", track - half_gauge, ["z"])):
             out.append({"name": deck_monitor_name(side, s + 1), "kind": "girder", "span": s,
                         "position": 0.5, "deck_surface": True, "lateral_offset_m": e,
                         "directions": directions})
+        if deck_width is not None:
+            for side, e in (("left", 0.5 * deck_width), ("right", -0.5 * deck_width)):
+                out.append({"name": f"deck_edge_{side}_span{s + 1}_mid", "kind": "girder",
+                            "span": s, "position": 0.5, "deck_surface": True,
+                            "lateral_offset_m": e, "directions": ["z"]})
     for p in range(model.dof_info["n_piers"]):
         out.append({"name": f"pier{p + 1}", "kind": "pier", "pier": p,
                     "directions": ["z", "y"]})

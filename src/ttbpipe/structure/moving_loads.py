@@ -142,11 +142,13 @@ def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
 def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
     """(dofs, table (n_steps+1, n)) of generalised girder forces of loads acting on the girder.
 
-    The load's lateral position (rail) is ignored: it acts on the girder axis (Fz, Fy, Mx).
-    A load on the common end of two spans acts on the first. Vectorised over the steps: each
-    load's span rows at all its positions (``SpanReduction.rows_at_many``).
+    The load's rail is ignored: it acts on the track's centre line, ``girder.track_offset_m``
+    to the left of the girder axis, so Fz adds the torque e Fz to Mx (paper eq. 24). A load on
+    the common end of two spans acts on the first. Vectorised over the steps: each load's span
+    rows at all its positions (``SpanReduction.rows_at_many``).
     """
     spans = model.spans
+    e_track = float(model.config["girder"]["track_offset_m"])
     off = model.dof_info["span_dof0"]
     dofs = np.concatenate([np.arange(o, o + s.n) for o, s in zip(off, spans)]).astype(np.int64)
     table = np.zeros((n_steps + 1, dofs.size))
@@ -164,8 +166,8 @@ def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
                 continue
             taken |= on
             rz, ry, rr = red.rows_at_many(x[steps])
-            table[steps, col0[s]:col0[s + 1]] += (rz * F[steps, 0:1] + ry * F[steps, 1:2]
-                                                  + rr * F[steps, 2:3])
+            fz, fy, mx = F[steps, 0:1], F[steps, 1:2], F[steps, 2:3]
+            table[steps, col0[s]:col0[s + 1]] += rz * fz + ry * fy + rr * (mx + e_track * fz)
     return dofs, table
 
 

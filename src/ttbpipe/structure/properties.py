@@ -89,6 +89,12 @@ GIRDER = {
     "max_mode_frequency_hz": 120.0,  # fixed-interface modes kept per span (see docs)
     "min_modes_per_direction": 1,
     "deck_height_m": 1.1,            # girder shear centre to top of deck (CA level) [M]
+    # lateral position of the track's centre line (midway between the rails) from the girder's
+    # shear centre, + to the left (rail 0's side): the seed paper's eq. 24 term B_r - b_s/2;
+    # about 2.5 m for each track of a double-track box girder [V]
+    "track_offset_m": 0.0,
+    # deck width (m): with a value, default monitors also at both deck edges (null: none)
+    "deck_width_m": None,
 }
 
 #: Bearings: two per girder end at +- lateral_spacing/2. [V: k, c physics.md section 6]
@@ -115,6 +121,19 @@ PIER = {
     "cy_Ns_m": 2.0e6,                # [M] same order as the bearings
     "cz_Ns_m": 2.0e6,
     "croll_Nms_rad": 2.0e7,
+    # a pier of this height (m, foundation to bearing plane) replaces the 3-DOF values above by
+    # a cantilever of the section below, reduced at its top (ttbpipe.structure.pier); null keeps
+    # the 3-DOF pier
+    "height_m": None,
+    "E_Pa": 3.15e10,                 # [V]
+    "I_lateral_m4": 73.23,           # bending in the lateral plane [V: "I"]
+    "area_m2": 20.8,                 # 5.2e4 kg/m / 2500 kg/m3 [C]
+    "mass_kg_m": 5.2e4,              # [V]
+    "cap_mass_kg": 1.0e5,            # pier cap at the top [M]
+    "cap_roll_inertia_kgm2": 9.0e5,  # 1.0e5 * 3^2 [C, M]
+    "damping_ratio": 0.05,           # every mode of the reduced pier [V: the paper's 0.05]
+    "element_length_m": 1.0,
+    "max_mode_frequency_hz": 120.0,  # fixed-interface modes kept, as for the girder
 }
 
 #: Ballasted track on subgrade, Zhai's model (Zhai, Wang & Lin 2004, JSV 270:673; Zhai's book)

@@ -22,7 +22,8 @@ import numpy as np
 import pandas as pd
 
 from ..dates import months_between
-from .samples import (build_case, extremes_from_run, mean_spectrum_seed, resolve_simulation)
+from .samples import (build_case, extremes_from_run, mean_spectrum_irregularity,
+                      resolve_simulation)
 
 log = logging.getLogger(__name__)
 
@@ -117,9 +118,7 @@ def sweep_irregularity(config: Mapping[str, Any]) -> dict[str, Any]:
     sim = resolve_simulation(config.get("simulation"))
     if not config.get("case", {}).get("sweep", {}).get("irregularity", True):
         return {"source": "none"}
-    irr = sim["irregularity"]
-    return {"source": "synthetic", "spectrum": irr["spectrum"], "dx_m": irr["dx_m"],
-            "fade_in_m": irr["fade_in_m"], "seed": mean_spectrum_seed(int(config["study"]["seed"]))}
+    return mean_spectrum_irregularity(sim["irregularity"], int(config["study"]["seed"]))
 
 
 def run_speed(config: Mapping[str, Any], speed_kmh: float) -> dict[str, float]:

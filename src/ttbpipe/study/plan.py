@@ -167,7 +167,8 @@ def batch_settings(config: Mapping[str, Any], kind: str, code_version: str) -> d
 
 def mc_profile_settings(config: Mapping[str, Any]) -> dict[str, Any]:
     """Profile settings of the Monte Carlo irregularity scenario (its population's PSD band and
-    the TIPM profile length and step)."""
+    the TIPM profile length, step and synthesis ``amplitudes``: ``tipm.profiles``), the keys
+    :func:`ttbpipe.study.samples.mc_profile` reads."""
     from ..tipm.stages import resolve_config
 
     return {"wavelength_band_m": (config.get("psd") or {}).get("wavelength_band_m"),

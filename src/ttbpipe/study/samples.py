@@ -50,6 +50,16 @@ def mean_spectrum_seed(study_seed: int) -> int:
     return int(seq.generate_state(1)[0])
 
 
+def mean_spectrum_irregularity(irregularity: Mapping[str, Any], study_seed: int) -> dict[str, Any]:
+    """The case's ``irregularity:`` section of the single mean-spectrum profile (scenarios
+    single, fields, fields_mc; case 1's sweep): ``simulation.irregularity``'s spectrum, step,
+    fade-in and synthesis (``amplitudes``), seeded by :func:`mean_spectrum_seed`.
+    ``irregularity``: the resolved ``simulation.irregularity`` section."""
+    return {"source": "synthetic", "spectrum": irregularity["spectrum"],
+            "dx_m": irregularity["dx_m"], "amplitudes": irregularity["amplitudes"],
+            "fade_in_m": irregularity["fade_in_m"], "seed": mean_spectrum_seed(study_seed)}
+
+
 def mc_fields_seed(study_seed: int) -> int:
     """Seed of the plain Monte Carlo fields scenarios (``fields_mc``, case 2's MCM reference):
     a stream of its own, so that MC sample i is independent of KLE sample i (the two estimates
@@ -75,11 +85,15 @@ def mc_profile(population: Mapping[str, Any], study_seed: int, section: int,
                sample_index: int) -> pd.DataFrame:
     """Profile of Monte Carlo irregularity sample i: population section ``section``'s own PSD
     (all four channels, whole section: the cross-channel levels stay together) synthesised with
-    random phases from ``profile_rng(seed, date, STREAM_MC_PROFILES, i)``.
+    random phases (or Gaussian coefficients, ``amplitudes``) from
+    ``profile_rng(seed, date, STREAM_MC_PROFILES, i)``.
 
     ``population``: {"psd_paths": [...], "wavelength_band_m": [lo, hi], "length_m", "dx_m",
-    "date": the latest campaign}.
+    "amplitudes" (``tipm.profiles.amplitudes``; missing: the default random phases),
+    "date": the latest campaign}; the profile keys are
+    :func:`ttbpipe.study.plan.mc_profile_settings`.
     """
+    from ..irregularity.synthesis import DEFAULT_AMPLITUDES
     from ..tipm.profiles import profiles_from_psd_sets
 
     band = population.get("wavelength_band_m")
@@ -92,7 +106,8 @@ def mc_profile(population: Mapping[str, Any], study_seed: int, section: int,
         pop.psd_mm2_m[[int(section)]], pop.frequency_per_m, pop.channels, [int(sample_index)],
         length_m=float(population["length_m"]), dx_m=float(population["dx_m"]),
         study_seed=study_seed, date=str(population["date"]), stream=STREAM_MC_PROFILES,
-        wavelength_band_m=tuple(band) if band is not None else (2.0, 200.0))
+        wavelength_band_m=tuple(band) if band is not None else (2.0, 200.0),
+        amplitudes=str(population.get("amplitudes", DEFAULT_AMPLITUDES)))
     for channel in PROFILE_CHANNELS:   # a population without a channel: that channel is flat
         if channel not in table.columns:
             table[channel] = 0.0
@@ -300,9 +315,7 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
         track["chainage_m"] = track["chainage_m"] - track["chainage_m"].iloc[0] - float(irr_cfg["lead_in_m"])
         irregularity = {"fade_in_m": irr_cfg["fade_in_m"]}
     else:   # the single mean-spectrum irregularity of the fields and single scenarios
-        irregularity = {"source": "synthetic", "spectrum": irr_cfg["spectrum"],
-                        "dx_m": irr_cfg["dx_m"], "fade_in_m": irr_cfg["fade_in_m"],
-                        "seed": mean_spectrum_seed(study_seed)}
+        irregularity = mean_spectrum_irregularity(irr_cfg, study_seed)
     if kind in ("fields", "fields_mc"):
         if fields is None:
             raise ValueError("scenario fields needs the fields: section of the configuration")

@@ -40,10 +40,10 @@ def _mass_inverse_sqrt(model, M):
     nd = model.packed.n_diag
     diag = M.diagonal()[:nd][free[:nd]]
     blocks = [sparse.diags(1.0 / np.sqrt(diag))]
-    for o, red in zip(model.dof_info["span_dof0"], model.spans):
-        f = free[o:o + red.n]
+    for o, block_mass in zip(model.dof_info["block_dof0"], model.dof_info["block_mass"]):
+        f = free[o:o + block_mass.shape[0]]
         if f.any():
-            L = np.linalg.cholesky(red.M[np.ix_(f, f)])
+            L = np.linalg.cholesky(block_mass[np.ix_(f, f)])
             blocks.append(sparse.csr_matrix(np.linalg.inv(L)))
     return sparse.block_diag(blocks).tocsr()
 

@@ -2,7 +2,9 @@
 
 Seed paper §3.2 step 4 and §3.3 ("time-frequency transformation"): each selected (or forecast)
 PSD set becomes one profile per channel by the spectral representation with random phases,
-:func:`ttbpipe.irregularity.synthesis.synthesize_from_psd_table` (physics.md §2).
+:func:`ttbpipe.irregularity.synthesis.synthesize_from_psd_table` (physics.md §2), or, with
+``tipm.profiles.amplitudes: gaussian``, with random Gaussian Fourier coefficients (a stationary
+Gaussian profile; docs/irregularity.md, "Gaussian representation").
 
 Seeds (project rule: a sample's random numbers depend only on the study seed and its index):
 profile ``sample_index`` of campaign ``date`` uses
@@ -23,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from .. import streams
-from ..irregularity.synthesis import synthesize_from_psd_table
+from ..irregularity.synthesis import DEFAULT_AMPLITUDES, synthesize_from_psd_table
 
 __all__ = ["profile_rng", "profiles_from_psd_sets", "STREAM_REPRESENTATIVE", "STREAM_FORECAST",
            "STREAM_MONTE_CARLO"]
@@ -53,11 +55,15 @@ def profile_rng(study_seed: int, date: str, stream: int, sample_index: int) -> n
 def profiles_from_psd_sets(psd_mm2_m: np.ndarray, frequency_per_m: np.ndarray,
                            channels: Sequence[str], sample_indices: Sequence[int], *,
                            length_m: float, dx_m: float, study_seed: int, date: str, stream: int,
-                           wavelength_band_m: tuple[float, float] = (2.0, 200.0)) -> pd.DataFrame:
+                           wavelength_band_m: tuple[float, float] = (2.0, 200.0),
+                           amplitudes: str = DEFAULT_AMPLITUDES) -> pd.DataFrame:
     """Profiles of PSD sets ``psd_mm2_m[sample, frequency, channel]``.
 
     Returns a long table ``sample_index, chainage_m, <channel>_mm ...`` (mm), one block of
     rows per sample. The wavelength band must lie inside the tabulated frequencies.
+    ``amplitudes``: ``random_phase`` (default) or ``gaussian``
+    (:func:`ttbpipe.irregularity.synthesis.synthesize_channel`); either way a profile draws
+    only from its own generator :func:`profile_rng`.
     """
     psd_mm2_m = np.asarray(psd_mm2_m, dtype=float)
     if psd_mm2_m.shape[0] != len(sample_indices):
@@ -67,10 +73,10 @@ def profiles_from_psd_sets(psd_mm2_m: np.ndarray, frequency_per_m: np.ndarray,
         table = synthesize_from_psd_table(
             frequency_per_m, {ch: psd_mm2_m[row, :, c] for c, ch in enumerate(channels)},
             length_m=length_m, dx_m=dx_m, rng=profile_rng(study_seed, date, stream, index),
-            wavelength_band_m=tuple(wavelength_band_m))
+            wavelength_band_m=tuple(wavelength_band_m), amplitudes=amplitudes)
         table.insert(0, "sample_index", int(index))
         blocks.append(table)
     out = pd.concat(blocks, ignore_index=True)
-    log.info("%d profiles of %g m at dx %g m (campaign %s, stream %d)", len(blocks), length_m, dx_m,
-             date, stream)
+    log.info("%d profiles of %g m at dx %g m (campaign %s, stream %d, amplitudes %s)", len(blocks),
+             length_m, dx_m, date, stream, amplitudes)
     return out

@@ -90,14 +90,16 @@ def select_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any], psd: 
 
 def profiles_stage(selection_table: pd.DataFrame, weights: pd.DataFrame, date: str,
                    tipm: Mapping[str, Any], psd: Mapping[str, Any], study_seed: int) -> pd.DataFrame:
-    """Space-domain profiles of one campaign's representative sets (stream 0)."""
+    """Space-domain profiles of one campaign's representative sets (stream 0; synthesis
+    ``tipm.profiles.amplitudes``)."""
     cfg = resolve_config(tipm)
     selection = TIPMSelection.from_long_table(selection_table, weights)
     return profiles_from_psd_sets(
         selection.psd_mm2_m, selection.frequency_per_m, selection.channels,
         selection.samples["sample_index"].to_list(), length_m=cfg["profiles"]["length_m"],
         dx_m=cfg["profiles"]["dx_m"], study_seed=study_seed, date=date,
-        stream=STREAM_REPRESENTATIVE, wavelength_band_m=tuple(psd["wavelength_band_m"]))
+        stream=STREAM_REPRESENTATIVE, wavelength_band_m=tuple(psd["wavelength_band_m"]),
+        amplitudes=cfg["profiles"]["amplitudes"])
 
 
 def distribution_stage(psd_paths: Sequence[str | Path], psd: Mapping[str, Any]
@@ -167,7 +169,8 @@ def forecast_stage(model: SpectralEvolution, selection: TIPMSelection, base_date
     """Forecasts of the PSD sets ``selection`` (see :func:`forecast_base`) at the configured
     horizons.
 
-    Returns (forecast PSD table, forecast states table (one row per profile), profiles).
+    Returns (forecast PSD table, forecast states table (one row per profile), profiles
+    (synthesis ``tipm.profiles.amplitudes``)).
     ``envelope = "fixed_p"``: eq. 56 iterated with the constant index p = level (the states that
     get profiles); ``envelope = "monte_carlo"``: percentiles of simulated paths (p ~ U(0,1) per
     step), the calibrated predictive band of docs/tipm.md. p = 0.5 is the median path, not the
@@ -210,7 +213,8 @@ def forecast_stage(model: SpectralEvolution, selection: TIPMSelection, base_date
         np.concatenate(psd_sets), selection.frequency_per_m, selection.channels,
         states_df["profile_index"].to_list(), length_m=cfg["profiles"]["length_m"],
         dx_m=cfg["profiles"]["dx_m"], study_seed=study_seed, date=base_date,
-        stream=STREAM_FORECAST, wavelength_band_m=tuple(psd["wavelength_band_m"]))
+        stream=STREAM_FORECAST, wavelength_band_m=tuple(psd["wavelength_band_m"]),
+        amplitudes=cfg["profiles"]["amplitudes"])
     profiles = profiles.rename(columns={"sample_index": "profile_index"})
     return pd.concat(rows, ignore_index=True), states_df, profiles
 
