@@ -34,6 +34,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                "EN 1990 A2, EN 12299)"),
     "assess-monitors": ("ttbpipe.assessment.cli_monitors",
                         "add the monitors of the EN 1990 A2 deck checks to a case"),
+    "trains": ("ttbpipe.trains.cli",
+               "the train library (HSLM-A1..A10 of EN 1991-2): list it, write a train's axles"),
 }
 
 

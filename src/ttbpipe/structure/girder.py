@@ -25,7 +25,7 @@ import numpy as np
 from scipy import linalg
 
 from .damping import span_damping_matrix
-from .shape_functions import hermite_shape  # noqa: F401  (girder users import it from here)
+from .shape_functions import hermite, hermite_shape  # noqa: F401  (girder users import it from here)
 
 
 def hermite_beam_matrices(L: float, EI: float, m: float) -> tuple[np.ndarray, np.ndarray]:
@@ -73,15 +73,22 @@ class SpanReduction:
 
     def rows_at(self, x_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Rows (n,) giving z, y and roll of the girder axis at global x from q."""
-        s = np.clip(x_m - self.start_m, 0.0, self.length_m)
+        rz, ry, rr = self.rows_at_many(np.array([float(x_m)]))
+        return rz[0], ry[0], rr[0]
+
+    def rows_at_many(self, x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`rows_at` for an array of k positions: three (k, n) arrays (x clipped to the span)."""
+        s = np.clip(np.asarray(x_m, dtype=float) - self.start_m, 0.0, self.length_m)
         n_el = self.node_x.size - 1
         h = self.length_m / n_el
-        e = min(int(s / h), n_el - 1)
+        e = np.minimum((s / h).astype(np.int64), n_el - 1)
         xi = (s - e * h) / h
-        N = hermite_shape(xi, h)
-        rz = N @ self.basis[0][2 * e:2 * e + 4]
-        ry = N @ self.basis[1][2 * e:2 * e + 4]
-        rr = np.array([1 - xi, xi]) @ self.basis[2][e:e + 2]
+        N = np.stack(hermite.py_func(xi, h), axis=1)                  # (k, 4)
+        hermite_dofs = 2 * e[:, None] + np.arange(4)
+        rz = np.einsum("kj,kjn->kn", N, self.basis[0][hermite_dofs])
+        ry = np.einsum("kj,kjn->kn", N, self.basis[1][hermite_dofs])
+        lin = np.stack([1.0 - xi, xi], axis=1)
+        rr = np.einsum("kj,kjn->kn", lin, self.basis[2][e[:, None] + np.arange(2)])
         return rz, ry, rr
 
 

@@ -9,7 +9,9 @@ histories (:mod:`ttbpipe.decimation`) as the coupled loop. For girder-only valid
 girder axis through the span's reduced basis instead (``loads.target: girder``).
 
 Sign convention: forces in the structure's axes (z up, y left); a wheel pressing on the rail is
-``Fz_N < 0``. ``axle_train.wheel_load_N`` is given as a positive magnitude and applied downwards.
+``Fz_N < 0``. ``axle_train.wheel_load_N`` is given as a positive magnitude and applied downwards;
+``axle_train.train: NAME`` takes the axles and their loads from the train library
+(:mod:`ttbpipe.trains`, e.g. ``HSLM-A1``), half of each axle load on each rail.
 """
 
 from __future__ import annotations
@@ -73,6 +75,30 @@ def axle_offsets(train: Mapping[str, Any]) -> np.ndarray:
     return pos
 
 
+def axle_train_loads(train: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """(axle distances behind the first axle (m), wheel load per rail (N, magnitude)).
+
+    ``train: NAME`` takes both from the train library (:func:`ttbpipe.trains.get_train`; each
+    axle load is shared equally by the two wheels); otherwise the axles come from
+    :func:`axle_offsets` and every wheel carries ``wheel_load_N``.
+    """
+    if "train" in train:
+        from ..trains import get_train
+
+        clash = sorted(set(train) & {"wheel_load_N", "axle_positions_m", "cars", "car_length_m",
+                                     "bogie_centre_distance_m", "wheelbase_m"})
+        if clash:
+            raise ValueError(f"loads.axle_train: train {train['train']!r} gives the axles and "
+                             f"loads; remove {', '.join(clash)}")
+        named = get_train(str(train["train"]))
+        return np.asarray(named.positions_m, float), np.asarray(named.axle_loads_N) / 2.0
+    if "wheel_load_N" not in train:
+        raise ValueError("loads.axle_train: give wheel_load_N (with axle_positions_m or a car "
+                         "layout) or a library train (train: NAME)")
+    offsets = axle_offsets(train)
+    return offsets, np.full(offsets.size, float(train["wheel_load_N"]))
+
+
 def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
     """LoadSet from the ``loads:`` section of a case config."""
     speed_default = float(loads_cfg.get("speed_kmh", 0.0)) / 3.6
@@ -92,11 +118,10 @@ def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
                      float(h.get("frequency_hz", 0.0)), float(h.get("phase_rad", 0.0))))
     train = loads_cfg.get("axle_train")
     if train:
-        offsets = axle_offsets(train)
+        offsets, wheel_loads = axle_train_loads(train)
         x_front = float(train.get("front_x0_m", 0.0))
-        P = float(train["wheel_load_N"])
         v = float(train["speed_kmh"]) / 3.6 if "speed_kmh" in train else speed_default
-        for d in offsets:
+        for d, P in zip(offsets, wheel_loads):
             for rail in (0, 1):
                 rows.append((rail, x_front - d, v, [-P, 0.0, 0.0], [0.0, 0.0, 0.0], 0.0, 0.0))
     if not rows:
@@ -118,7 +143,9 @@ def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
     """(dofs, table (n_steps+1, n)) of generalised girder forces of loads acting on the girder.
 
     The load's rail is ignored: it acts on the track's centre line, ``girder.track_offset_m``
-    to the left of the girder axis, so Fz adds the torque e Fz to Mx (paper eq. 24).
+    to the left of the girder axis, so Fz adds the torque e Fz to Mx (paper eq. 24). A load on
+    the common end of two spans acts on the first. Vectorised over the steps: each load's span
+    rows at all its positions (``SpanReduction.rows_at_many``).
     """
     spans = model.spans
     e_track = float(model.config["girder"]["track_offset_m"])
@@ -126,17 +153,21 @@ def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
     dofs = np.concatenate([np.arange(o, o + s.n) for o, s in zip(off, spans)]).astype(np.int64)
     table = np.zeros((n_steps + 1, dofs.size))
     col0 = np.cumsum([0] + [s.n for s in spans])
-    for step in range(n_steps + 1):
-        t = step * dt
-        for i in range(loads.n):
-            x = loads.x0[i] + loads.speed[i] * t
-            F = loads.F0[i] + loads.F1[i] * np.sin(2 * np.pi * loads.freq[i] * t + loads.phase[i])
-            for s, red in enumerate(spans):
-                if red.start_m <= x <= red.start_m + red.length_m:
-                    rz, ry, rr = red.rows_at(x)
-                    table[step, col0[s]:col0[s + 1]] += (rz * F[0] + ry * F[1]
-                                                         + rr * (F[2] + e_track * F[0]))
-                    break
+    t = np.arange(n_steps + 1) * dt
+    for i in range(loads.n):
+        x = loads.x0[i] + loads.speed[i] * t
+        F = loads.F0[i][None, :] + loads.F1[i][None, :] * np.sin(
+            2 * np.pi * loads.freq[i] * t + loads.phase[i])[:, None]
+        taken = np.zeros(t.size, dtype=bool)
+        for s, red in enumerate(spans):
+            on = ~taken & (x >= red.start_m) & (x <= red.start_m + red.length_m)
+            steps = np.flatnonzero(on)
+            if steps.size == 0:
+                continue
+            taken |= on
+            rz, ry, rr = red.rows_at_many(x[steps])
+            fz, fy, mx = F[steps, 0:1], F[steps, 1:2], F[steps, 2:3]
+            table[steps, col0[s]:col0[s + 1]] += rz * fz + ry * fy + rr * (mx + e_track * fz)
     return dofs, table
 
 
