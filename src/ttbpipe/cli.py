@@ -34,6 +34,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
                "EN 1990 A2, EN 12299)"),
     "assess-monitors": ("ttbpipe.assessment.cli_monitors",
                         "add the monitors of the EN 1990 A2 deck checks to a case"),
+    "contact-geometry": ("ttbpipe.vehicle.cli_contact_geometry",
+                         "wheel-rail contact geometry of real profiles vs lateral displacement, "
+                         "EN 15302 equivalent conicity"),
 }
 
 
