@@ -40,6 +40,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--step-mm", type=float, default=0.1, help="lateral displacement step (mm)")
     parser.add_argument("--two-point-tol-mm", type=float, default=0.05,
                         help="gap within which a second local gap minimum is a second contact (mm)")
+    parser.add_argument("--smoothing-mm", type=float, default=0.0,
+                        help="rms deviation allowed to the smoothing spline through the profile"
+                             " points (mm): about the measuring scatter for measured profiles"
+                             " (e.g. 0.002); 0 interpolates (reference profiles)")
     parser.add_argument("--amplitude-mm", type=float, nargs="+", default=[3.0],
                         help="amplitudes of the equivalent conicity (mm)")
     parser.add_argument("--out", required=True, help="output Parquet table")
@@ -70,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
         pair = ContactPair(wheel, rail, inclination=inclination, gauge=args.gauge_mm * MM,
                            flange_back_distance=args.flange_back_mm * MM,
                            nominal_radius=args.nominal_radius_mm * MM,
-                           two_point_tol=args.two_point_tol_mm * MM)
+                           two_point_tol=args.two_point_tol_mm * MM,
+                           smoothing=args.smoothing_mm * MM)
         n = int(round(args.y_max_mm / args.step_mm))
         y = np.arange(-n, n + 1) * args.step_mm * MM
         table = pair.solve(y)
@@ -86,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
     config = {"wheel": args.wheel, "rail": args.rail, "inclination": args.inclination,
               "gauge_mm": args.gauge_mm, "flange_back_mm": args.flange_back_mm,
               "nominal_radius_mm": args.nominal_radius_mm, "y_max_mm": args.y_max_mm,
-              "step_mm": args.step_mm, "two_point_tol_mm": args.two_point_tol_mm}
+              "step_mm": args.step_mm, "two_point_tol_mm": args.two_point_tol_mm,
+              "smoothing_mm": args.smoothing_mm}
     centred = table.attrs.get("centred", {})
     summary = {"equivalent_conicity": conicity,
                "centred_rolling_radius_left_mm": centred.get("rolling_radius_left_mm"),

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.interpolate import make_interp_spline
+from scipy.interpolate import make_interp_spline, make_splprep
 from scipy.optimize import brentq
 
 from .profiles import MM, Profile
@@ -86,17 +86,24 @@ class ProfileCurve:
     """Cubic parametric spline (y(u), z(u)) through a profile's points, u = chord length (m).
 
     Gives points at a uniform arc-length step, the tangent slope dz/dy and the signed curvature
-    (positive when z'' > 0 in the profile's own y-z axes).
+    (positive when z'' > 0 in the profile's own y-z axes). ``smoothing`` (m) > 0 fits a
+    smoothing spline whose rms distance from the points is about ``smoothing`` (scipy
+    make_splprep with s = n smoothing^2) -- for measured profiles, whose scatter (MiniProf-type
+    devices: a few um) would otherwise dominate the second derivative and so the contact radii;
+    0 interpolates (analytic profiles).
     """
 
-    def __init__(self, profile: Profile):
+    def __init__(self, profile: Profile, smoothing: float = 0.0):
         y, z = profile.lateral, profile.vertical
         keep = np.concatenate([[True], np.hypot(np.diff(y), np.diff(z)) > 1e-12])
         y, z = y[keep], z[keep]
         u = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(y), np.diff(z)))])
         self.profile = profile
         self.u = u
-        self.spline = make_interp_spline(u, np.column_stack([y, z]), k=3)
+        if smoothing > 0:
+            self.spline, _ = make_splprep([y, z], u=u, s=y.size * smoothing ** 2)
+        else:
+            self.spline = make_interp_spline(u, np.column_stack([y, z]), k=3)
 
     @property
     def length(self) -> float:
@@ -105,14 +112,18 @@ class ProfileCurve:
     def sample(self, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         n = max(int(np.ceil(self.length / step)) + 1, 10)
         u = np.linspace(0.0, self.length, n)
-        yz = self.spline(u)
+        yz = self._eval(u)
         return u, yz[:, 0], yz[:, 1]
+
+    def _eval(self, u, nu=0):
+        out = np.asarray(self.spline(u, nu))
+        return out if out.shape[-1] == 2 and out.ndim == np.ndim(u) + 1 else np.moveaxis(out, 0, -1)
 
     def local(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """y, z, slope dz/dy and curvature at parameter(s) u."""
-        yz = self.spline(u)
-        d1 = self.spline(u, 1)
-        d2 = self.spline(u, 2)
+        yz = self._eval(u)
+        d1 = self._eval(u, 1)
+        d2 = self._eval(u, 2)
         speed2 = d1[..., 0] ** 2 + d1[..., 1] ** 2
         curv = (d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0]) / speed2 ** 1.5
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -147,8 +158,8 @@ class RailSide:
 
 
 def _place_rail(profile: Profile, inclination: float, gauge: float, gauge_height: float,
-                step: float) -> RailSide:
-    curve = ProfileCurve(profile)
+                step: float, smoothing: float = 0.0) -> RailSide:
+    curve = ProfileCurve(profile, smoothing)
     par, y, z = curve.sample(step)
     beta = np.arctan(inclination)
     # rotate so that the crown normal tilts towards the track centre (the field side rises)
@@ -193,10 +204,11 @@ class WheelSide:
     zw: np.ndarray                     # profile vertical (= -(r - r0))
 
 
-def _place_wheel(profile: Profile, flange_back_distance: float, step: float) -> WheelSide:
+def _place_wheel(profile: Profile, flange_back_distance: float, step: float,
+                 smoothing: float = 0.0) -> WheelSide:
     if profile.kind != "wheel":
         raise ValueError(f"profile {profile.name!r} is a {profile.kind}, not a wheel")
-    curve = ProfileCurve(profile)
+    curve = ProfileCurve(profile, smoothing)
     par, s, zw = curve.sample(step)
     base = 0.5 * flange_back_distance - profile.flange_back
     return WheelSide(curve, base, par, s, zw)
@@ -222,6 +234,7 @@ class ContactPair:
     rail_step: float = 0.01 * MM
     two_point_tol: float = 0.05 * MM
     min_separation: float = 2.0 * MM
+    smoothing: float = 0.0             # m; > 0 for measured profiles (see ProfileCurve)
 
     def __post_init__(self):
         wr = self.wheel_right or self.wheel_left
@@ -229,10 +242,10 @@ class ContactPair:
         for p, kind in ((self.wheel_left, "wheel"), (wr, "wheel"), (self.rail_left, "rail"), (rr, "rail")):
             if p.kind != kind:
                 raise ValueError(f"profile {p.name!r} is a {p.kind}, expected a {kind}")
-        self._wheels = (_place_wheel(self.wheel_left, self.flange_back_distance, self.wheel_step),
-                        _place_wheel(wr, self.flange_back_distance, self.wheel_step))
+        self._wheels = tuple(_place_wheel(p, self.flange_back_distance, self.wheel_step,
+                                          self.smoothing) for p in (self.wheel_left, wr))
         self._rails = tuple(_place_rail(p, self.inclination, self.gauge, self.gauge_height,
-                                        self.rail_step) for p in (self.rail_left, rr))
+                                        self.rail_step, self.smoothing) for p in (self.rail_left, rr))
 
     # -- gaps -----------------------------------------------------------------------------------
     def _gaps(self, side: int, y: np.ndarray, roll: np.ndarray):
@@ -440,6 +453,8 @@ def equivalent_conicity(y: np.ndarray, delta_r: np.ndarray, amplitude: float, n:
         target = pot(yp)
         if w_first <= target:
             return 1.0
+        if pot(centre) >= target:                  # y+ still in the well's flat bottom
+            return yp - centre - 2 * amplitude
         return yp - brentq(lambda v: pot(v) - target, y[0], centre, xtol=1e-15) - 2 * amplitude
 
     hi = min(centre + 2 * amplitude, y[-1])

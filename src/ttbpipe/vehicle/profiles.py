@@ -272,7 +272,9 @@ def write_reference_profiles(directory: str | Path, step_mm: float = 0.1) -> lis
     This is how ``src/ttbpipe/data/profiles/*.txt`` were made
     (``python -c "from ttbpipe.vehicle.profiles import write_reference_profiles as w;
     w('src/ttbpipe/data/profiles')"``); a test checks that the shipped files equal the analytic
-    definitions.
+    definitions. Coordinates to 1e-9 mm: the contact radii come from the second derivative of a
+    spline through the points, which rounding to 1e-6 mm at a 0.1 mm step would spoil (R300 read
+    as 312 mm).
     """
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
@@ -285,7 +287,7 @@ def write_reference_profiles(directory: str | Path, step_mm: float = 0.1) -> lis
         if p.kind == "wheel":
             header.append(f"flange_back_mm: {p.flange_back / MM:.6f}")
         path = directory / f"{name}.txt"
-        np.savetxt(path, np.column_stack([p.lateral / MM, p.vertical / MM]), fmt="%.6f",
+        np.savetxt(path, np.column_stack([p.lateral / MM, p.vertical / MM]), fmt="%.9f",
                    header="\n".join(header))
         out.append(path)
     return out
