@@ -23,17 +23,19 @@ log = logging.getLogger(__name__)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from .contact_geometry import BENCHMARK_WHEEL_RADIUS, GAUGE_HEIGHT, STANDARD_FLANGE_BACK, STANDARD_GAUGE
+
     parser.add_argument("--wheel", required=True,
                         help="wheel profile: s1002, or a y z file (mm, y towards the field side,"
                              " z up, origin at the taping line)")
     parser.add_argument("--rail", required=True,
                         help="rail profile: 60e1 (alias uic60), or a y z file (mm, origin at the crown)")
     parser.add_argument("--inclination", default="1:40", help="rail inclination: 1:20, 1:40, none")
-    parser.add_argument("--gauge-mm", type=float, default=1435.0,
-                        help="track gauge, measured 14 mm below the rail top (mm)")
-    parser.add_argument("--flange-back-mm", type=float, default=1360.0,
+    parser.add_argument("--gauge-mm", type=float, default=STANDARD_GAUGE * 1e3,
+                        help=f"track gauge, measured {GAUGE_HEIGHT * 1e3:g} mm below the rail top (mm)")
+    parser.add_argument("--flange-back-mm", type=float, default=STANDARD_FLANGE_BACK * 1e3,
                         help="distance between the wheels' flange backs (mm)")
-    parser.add_argument("--nominal-radius-mm", type=float, default=460.0,
+    parser.add_argument("--nominal-radius-mm", type=float, default=BENCHMARK_WHEEL_RADIUS * 1e3,
                         help="wheel radius at the taping line (mm)")
     parser.add_argument("--y-max-mm", type=float, default=10.0,
                         help="largest lateral displacement (mm); the table runs from -y_max to y_max")

@@ -59,6 +59,9 @@ GAUGE_HEIGHT = 0.014
 #: Manchester benchmark set-up (Shackleton & Iwnicki 2008) and EN 15302's reference cases.
 STANDARD_GAUGE = 1.435
 STANDARD_FLANGE_BACK = 1.360
+#: Wheel radius at the taping line of the Manchester benchmark wheelset (m): NOMRADW = 460 mm of
+#: its CONTACT input (github.com/eve70a/CONTACT, examples/mbench_a22_left.inp).
+BENCHMARK_WHEEL_RADIUS = 0.460
 
 
 def parse_inclination(text: str | float) -> float:
@@ -228,7 +231,7 @@ class ContactPair:
     inclination: float = 1.0 / 40.0
     gauge: float = STANDARD_GAUGE
     flange_back_distance: float = STANDARD_FLANGE_BACK
-    nominal_radius: float = 0.46
+    nominal_radius: float = BENCHMARK_WHEEL_RADIUS
     gauge_height: float = GAUGE_HEIGHT
     wheel_step: float = 0.02 * MM
     rail_step: float = 0.01 * MM
@@ -293,6 +296,9 @@ class ContactPair:
             side = np.where(left, -1, 1)
             if np.all(np.abs(fc) < tol) or np.all(np.abs(b - a) < 1e-13):
                 break
+        worst = float(np.max(np.abs(fc)))
+        if worst > 1e-9:
+            log.warning("roll iteration: wheel gaps still differ by %.3g mm after %d steps", worst / MM, maxit)
         return c
 
     # -- contact quantities ----------------------------------------------------------------------
@@ -300,7 +306,7 @@ class ContactPair:
         sgn = 1.0 if side == 0 else -1.0
         gap, u = self._gaps(side, y, roll)
         gap = gap + lift[:, None]
-        w, rail = self._wheels[side], self._rails[side]
+        w = self._wheels[side]
         n = gap.shape[1]
         rows = np.arange(gap.shape[0])
 
@@ -321,7 +327,7 @@ class ContactPair:
 
         i1 = np.argmin(gap, axis=1)
         par1, u1, g1 = refine(i1)
-        out = self._quantities(side, sgn, par1, u1, roll)
+        out = self._quantities(side, sgn, par1, u1)
         # second contact: interior local minima far enough from the first along the wheel
         interior = np.zeros_like(gap, bool)
         interior[:, 1:-1] = (gap[:, 1:-1] < gap[:, :-2]) & (gap[:, 1:-1] <= gap[:, 2:]) \
@@ -331,7 +337,7 @@ class ContactPair:
         i2 = np.argmin(cand, axis=1)
         has2 = np.isfinite(cand[rows, i2])
         par2, u2, g2 = refine(i2)
-        second = self._quantities(side, sgn, par2, u2, roll)
+        second = self._quantities(side, sgn, par2, u2)
         out["second_gap"] = np.where(has2, g2, np.nan)
         out["two_point"] = has2 & (g2 <= self.two_point_tol)
         for k in ("rolling_radius", "angle", "wheel_position", "rail_position", "track_position"):
@@ -339,7 +345,8 @@ class ContactPair:
         out["gap"] = g1
         return out
 
-    def _quantities(self, side, sgn, par, u_c, roll):
+    def _quantities(self, side, sgn, par, u_c):
+        """Contact quantities at wheel spline parameters ``par`` and track lateral ``u_c``."""
         w, rail = self._wheels[side], self._rails[side]
         s, zw, wslope, wcurv = w.curve.local(par)
         y_rail, rslope_track, rcurv = rail.at(u_c)
