@@ -35,6 +35,19 @@ def test_s1002_definition_landmarks():
         s1002_radius_increase(61.0)
 
 
+def test_s1002_designation_dimensions():
+    """EN 13715 names the profile "S1002 h28 e32,5 6,7 %": flange height 28 mm, flange thickness
+    32.5 mm measured from the flange back at 10 mm from the taping line towards the flange tip,
+    and the 6.7 % (1:15) slope of the outer tread section A."""
+    from scipy.optimize import brentq
+
+    assert s1002_radius_increase(-55.0)[0] - s1002_radius_increase(0.0)[0] == pytest.approx(28.0)
+    s10 = brentq(lambda s: s1002_radius_increase(s)[0] - 10.0, -49.6, -26.0)
+    assert s10 - (-70.0) == pytest.approx(32.5, abs=1e-6)
+    slope = (s1002_radius_increase(40.0)[0] - s1002_radius_increase(50.0)[0]) / 10.0
+    assert slope == pytest.approx(0.067, abs=5e-4)
+
+
 def test_60e1_head_construction():
     """60E1 (EN 13674-1): R300 to y = 10.228 mm, R80 to 26.0265 mm, R13 to the 1:20 flank; the
     head is 72 mm wide (2 x 36.00 mm) where the R13 arcs meet the flanks, 14.3 mm below the
@@ -183,6 +196,29 @@ _MBENCH_A22 = np.array([
 def s1002_60e1():
     return ContactPair(reference_profile("s1002"), reference_profile("60e1"), inclination=1 / 40,
                        gauge=1.435, flange_back_distance=1.360, nominal_radius=0.460)
+
+
+@pytest.mark.parametrize("inclination", ["none", "1:20", "1:40"])
+def test_rails_mounted_at_gauge_and_inclination(inclination):
+    """Each rail's gauge point, 14 mm below the top of the inclined rail (EN 13848-1), lies at
+    half the gauge (1435 mm) from the track centre, and the crown normal leans towards the track
+    centre by the inclination: the inclined head's top is where the profile's normal tilts by
+    beta, 300 sin(beta) mm to the field side on the R300 crown (7.50 mm at 1:40) or, beyond
+    its end at 10.228 mm, on the R80 arc, whose centre is at 10.228 (1 - 80/300) mm (11.49 mm
+    at 1:20)."""
+    beta = np.arctan(parse_inclination(inclination))
+    pair = ContactPair(reference_profile("s1002"), reference_profile("60e1"),
+                       inclination=parse_inclination(inclination))
+    for rail in pair._rails:
+        zg = -0.014
+        i = int(np.argmax(rail.z >= zg))               # first head point at/above 14 mm depth
+        ug = np.interp(zg, rail.z[i - 1:i + 1], rail.u[i - 1:i + 1])
+        assert ug == pytest.approx(0.7175, abs=1e-7)
+        assert np.all(rail.u[rail.z >= zg] >= ug - 1e-9)
+        top_profile_y = rail.profile_coordinate(np.array([rail.u[np.argmax(rail.z)]]))[0]
+        on_crown = 300.0 * np.sin(beta)
+        expected = on_crown if on_crown <= 10.228 else 10.228 * (1 - 80 / 300) + 80 * np.sin(beta)
+        assert top_profile_y == pytest.approx(expected * MM, abs=2e-5)
 
 
 def test_s1002_60e1_against_manchester_benchmark(s1002_60e1):
