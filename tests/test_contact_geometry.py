@@ -87,7 +87,8 @@ def _write(path, rows, header="# y z\n"):
 
 
 def test_reader_reads_mm_csv_and_mirrors(tmp_path):
-    """A MiniProf-like export: a header line, comma-separated y, z in mm, decreasing y."""
+    """A MiniProf-like export: a header line, comma-separated y, z in mm, decreasing y; the same
+    with semicolons and decimal commas."""
     y = np.linspace(30.0, -30.0, 61)
     z = -(y ** 2) / 600.0
     path = tmp_path / "rail.csv"
@@ -95,6 +96,10 @@ def test_reader_reads_mm_csv_and_mirrors(tmp_path):
     p = read_profile(path, kind="rail")
     assert np.all(np.diff(p.lateral) > 0)
     assert p.lateral[0] == pytest.approx(-0.030) and p.vertical.max() == pytest.approx(0.0)
+    euro = tmp_path / "rail_eu.csv"
+    euro.write_text("y;z\n" + "".join(f"{a:.4f};{b:.5f}\n".replace(".", ",") for a, b in zip(y, z)))
+    pe = read_profile(euro, kind="rail")
+    np.testing.assert_allclose(pe.vertical, p.vertical, atol=1e-12)
     wheel = _write(tmp_path / "w.txt", [(a, 0.05 * a) for a in np.linspace(-70, 60, 131)],
                    header="# flange_back_mm: -70\n")
     w = read_profile(wheel, kind="wheel")

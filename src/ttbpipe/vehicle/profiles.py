@@ -313,7 +313,8 @@ def read_profile(path: str | Path, kind: str, *, name: str | None = None, units:
                  mirror: bool = False, flange_back_mm: float | None = None) -> Profile:
     """Read a measured or drawn profile: two columns, lateral y and vertical z.
 
-    Accepted: whitespace, comma or semicolon separated numbers; lines starting with ``#``, ``!``,
+    Accepted: whitespace- or comma-separated numbers, or semicolon-separated ones with decimal
+    commas (``-12,5;3,25``, European CSV); lines starting with ``#``, ``!``,
     ``%`` or a non-numeric header are skipped; a ``flange_back_mm: X`` comment sets the wheel's
     flange back. Coordinates as described in the module docstring (y towards the field side, z
     up; ``mirror=True`` flips y for files written with y towards the track centre).
@@ -343,7 +344,10 @@ def read_profile(path: str | Path, kind: str, *, name: str | None = None, units:
                 if rows:
                     raise ValueError(f"{path}:{lineno}: non-numeric row after the data started: {text!r}")
                 continue                                 # a header line
-            parts = [p for p in re.split(r"[,;\s]+", text) if p]
+            if ";" in text:                              # European CSV: ';' columns, ',' decimals
+                parts = [p.strip().replace(",", ".") for p in text.split(";") if p.strip()]
+            else:
+                parts = [p for p in re.split(r"[,\s]+", text) if p]
             try:
                 vals = [float(p) for p in parts[:2]]
             except ValueError:
