@@ -172,6 +172,27 @@ def test_cone_on_crown_gives_klingel_geometry():
         assert harmonic_conicity(y, dr, a) == pytest.approx(lam, rel=0.035)
 
 
+def test_unequal_wheel_radii_shift_delta_r_not_conicity():
+    """A right wheel 0.2 mm smaller in radius (a measured pair; EN 15302's cases E5-E8 differ by
+    1 mm in radius): on the cone Delta-r shifts by a constant (0.2 mm times the same roll factor
+    1 + (r0 + R) lambda / a0), the wheelset oscillates about the new zero of Delta-r, and the
+    EN 15302 Annex B conicity is unchanged (the harmonic one too, Delta-r being linear)."""
+    lam = 0.05
+    y = np.linspace(-8e-3, 8e-3, 81)
+    kwargs = dict(inclination=0.0)
+    sym = ContactPair(cone_wheel_profile(lam), crown_rail_profile(), **kwargs).solve(y)
+    asym = ContactPair(cone_wheel_profile(lam), crown_rail_profile(), nominal_radius_right=0.4598,
+                       **kwargs).solve(y)
+    shift = asym["rolling_radius_difference_mm"] - sym["rolling_radius_difference_mm"]
+    assert np.ptp(shift) < 1e-4
+    assert shift.mean() == pytest.approx(0.2 * 1.0333, rel=2e-3)
+    dr_s = sym["rolling_radius_difference_mm"].to_numpy() * MM
+    dr_a = asym["rolling_radius_difference_mm"].to_numpy() * MM
+    for a in (1e-3, 3e-3):
+        assert equivalent_conicity(y, dr_a, a) == pytest.approx(equivalent_conicity(y, dr_s, a), rel=1e-5)
+        assert harmonic_conicity(y, dr_a, a) == pytest.approx(harmonic_conicity(y, dr_s, a), rel=1e-5)
+
+
 # Manchester contact benchmark, case A-2.2 (Shackleton & Iwnicki 2008, VSD 46 Suppl.: S1002 on
 # UIC60 at 1:40, gauge 1435 mm at 14 mm, flange back 1360 mm, r0 460 mm), as solved by CONTACT
 # (Vollebregt; github.com/eve70a/CONTACT, examples/mbench_a22_left.ref_out and

@@ -30,6 +30,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              " z up, origin at the taping line)")
     parser.add_argument("--rail", required=True,
                         help="rail profile: 60e1 (alias uic60), or a y z file (mm, origin at the crown)")
+    parser.add_argument("--wheel-right", default=None,
+                        help="right wheel profile if it differs from --wheel (a measured pair)")
+    parser.add_argument("--rail-right", default=None,
+                        help="right rail profile if it differs from --rail")
     parser.add_argument("--inclination", default="1:40", help="rail inclination: 1:20, 1:40, none")
     parser.add_argument("--gauge-mm", type=float, default=STANDARD_GAUGE * 1e3,
                         help=f"track gauge, measured {GAUGE_HEIGHT * 1e3:g} mm below the rail top (mm)")
@@ -37,6 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="distance between the wheels' flange backs (mm)")
     parser.add_argument("--nominal-radius-mm", type=float, default=BENCHMARK_WHEEL_RADIUS * 1e3,
                         help="wheel radius at the taping line (mm)")
+    parser.add_argument("--nominal-radius-right-mm", type=float, default=None,
+                        help="right wheel radius at the taping line if it differs (mm)")
     parser.add_argument("--y-max-mm", type=float, default=10.0,
                         help="largest lateral displacement (mm); the table runs from -y_max to y_max")
     parser.add_argument("--step-mm", type=float, default=0.1, help="lateral displacement step (mm)")
@@ -70,10 +76,14 @@ def run(args: argparse.Namespace) -> int:
     try:
         wheel = _profile(args.wheel, "wheel")
         rail = _profile(args.rail, "rail")
+        wheel_right = _profile(args.wheel_right, "wheel") if args.wheel_right else None
+        rail_right = _profile(args.rail_right, "rail") if args.rail_right else None
         inclination = parse_inclination(args.inclination)
         if args.step_mm <= 0 or args.y_max_mm <= 0:
             raise ValueError("--step-mm and --y-max-mm must be positive")
-        pair = ContactPair(wheel, rail, inclination=inclination, gauge=args.gauge_mm * MM,
+        radius_right = None if args.nominal_radius_right_mm is None else args.nominal_radius_right_mm * MM
+        pair = ContactPair(wheel, rail, wheel_right, rail_right, inclination=inclination,
+                           gauge=args.gauge_mm * MM, nominal_radius_right=radius_right,
                            flange_back_distance=args.flange_back_mm * MM,
                            nominal_radius=args.nominal_radius_mm * MM,
                            two_point_tol=args.two_point_tol_mm * MM,
@@ -90,7 +100,9 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, OSError) as exc:
         print(f"ttbpipe contact-geometry: {exc}", file=sys.stderr)
         return 1
-    config = {"wheel": args.wheel, "rail": args.rail, "inclination": args.inclination,
+    config = {"wheel": args.wheel, "rail": args.rail, "wheel_right": args.wheel_right,
+              "rail_right": args.rail_right,
+              "nominal_radius_right_mm": args.nominal_radius_right_mm, "inclination": args.inclination,
               "gauge_mm": args.gauge_mm, "flange_back_mm": args.flange_back_mm,
               "nominal_radius_mm": args.nominal_radius_mm, "y_max_mm": args.y_max_mm,
               "step_mm": args.step_mm, "two_point_tol_mm": args.two_point_tol_mm,

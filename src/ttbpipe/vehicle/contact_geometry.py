@@ -222,7 +222,11 @@ def _place_wheel(profile: Profile, flange_back_distance: float, step: float,
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class ContactPair:
-    """Wheel and rail profiles mounted as a wheelset on a track (left and right may differ)."""
+    """Wheel and rail profiles mounted as a wheelset on a track.
+
+    Left and right may differ: ``wheel_right``/``rail_right`` (default: the left ones, mirrored)
+    and ``nominal_radius_right`` (default: ``nominal_radius``) for measured wheel pairs.
+    """
 
     wheel_left: Profile
     rail_left: Profile
@@ -232,6 +236,7 @@ class ContactPair:
     gauge: float = STANDARD_GAUGE
     flange_back_distance: float = STANDARD_FLANGE_BACK
     nominal_radius: float = BENCHMARK_WHEEL_RADIUS
+    nominal_radius_right: float | None = None   # a right wheel of another diameter (EN 15302 E5-E8)
     gauge_height: float = GAUGE_HEIGHT
     wheel_step: float = 0.02 * MM
     rail_step: float = 0.01 * MM
@@ -250,6 +255,11 @@ class ContactPair:
         self._rails = tuple(_place_rail(p, self.inclination, self.gauge, self.gauge_height,
                                         self.rail_step, self.smoothing) for p in (self.rail_left, rr))
 
+    def _radius(self, side: int) -> float:
+        if side == 1 and self.nominal_radius_right is not None:
+            return self.nominal_radius_right
+        return self.nominal_radius
+
     # -- gaps -----------------------------------------------------------------------------------
     def _gaps(self, side: int, y: np.ndarray, roll: np.ndarray):
         """Vertical gaps (n_y, n_s) of wheel ``side`` (0 left, 1 right) at zero wheelset height,
@@ -257,7 +267,7 @@ class ContactPair:
         sgn = 1.0 if side == 0 else -1.0
         w, rail = self._wheels[side], self._rails[side]
         big_u = w.base + w.s                                  # wheelset frame, side coordinates
-        big_z = w.zw - self.nominal_radius
+        big_z = w.zw - self._radius(side)
         ph = (sgn * roll)[:, None]
         c, s = np.cos(ph), np.sin(ph)
         u = (sgn * y)[:, None] + big_u[None, :] * c - big_z[None, :] * s
@@ -352,7 +362,7 @@ class ContactPair:
         y_rail, rslope_track, rcurv = rail.at(u_c)
         delta = np.arctan(rslope_track)
         delta_w = np.arctan(wslope)                       # in the wheelset frame
-        radius = self.nominal_radius - zw
+        radius = self._radius(side) - zw
         with np.errstate(divide="ignore"):
             return {
                 "rolling_radius": radius,
