@@ -381,3 +381,12 @@ def test_cli_writes_table(tmp_path, capsys):
     assert prov["summary"]["equivalent_conicity"]["3"]["en15302_annex_b"] == pytest.approx(0.177, abs=0.003)
     assert main(["contact-geometry", "--wheel", "lma", "--rail", "60e1", "--out",
                  str(tmp_path / "x.parquet")]) == 1
+    # a rail given as a measured-style CSV file (mm) gives the same table
+    rail = reference_profile("60e1")
+    csv = tmp_path / "rail.csv"
+    csv.write_text("y_mm,z_mm\n" + "".join(f"{a / MM:.9f},{b / MM:.9f}\n"
+                                            for a, b in zip(rail.lateral, rail.vertical)))
+    out2 = tmp_path / "cg2.parquet"
+    assert main(["contact-geometry", "--wheel", "s1002", "--rail", str(csv), "--y-max-mm", "4",
+                 "--step-mm", "0.5", "--out", str(out2)]) == 0
+    pd.testing.assert_frame_equal(pd.read_parquet(out2), t)

@@ -350,7 +350,8 @@ class ContactPair:
         second = self._quantities(side, sgn, par2, u2)
         out["second_gap"] = np.where(has2, g2, np.nan)
         out["two_point"] = has2 & (g2 <= self.two_point_tol)
-        for k in ("rolling_radius", "angle", "wheel_position", "rail_position", "track_position"):
+        for k in ("rolling_radius", "angle", "wheel_position", "rail_position", "track_position",
+                  "wheel_transverse_radius", "rail_transverse_radius"):
             out["second_" + k] = np.where(has2, second[k], np.nan)
         out["gap"] = g1
         return out
@@ -402,6 +403,8 @@ class ContactPair:
             cols[f"second_contact_position_rail_{name}_mm"] = r["second_rail_position"] / MM
             cols[f"second_contact_angle_{name}_rad"] = r["second_angle"]
             cols[f"second_rolling_radius_{name}_mm"] = r["second_rolling_radius"] / MM
+            cols[f"second_wheel_transverse_radius_{name}_mm"] = r["second_wheel_transverse_radius"] / MM
+            cols[f"second_rail_transverse_radius_{name}_mm"] = r["second_rail_transverse_radius"] / MM
         cols["rolling_radius_difference_mm"] = cols["rolling_radius_left_mm"] - cols["rolling_radius_right_mm"]
         df = pd.DataFrame(cols)
         centre = df.iloc[0]
