@@ -204,6 +204,15 @@ def test_case_selects_train_by_name():
     assert np.max(np.abs(a[:n] - a_ref[:n])) <= 0.05 * np.abs(a_ref).max()
 
 
+def test_case_train_errors():
+    model = girder_model()
+    with pytest.raises(ValueError, match=r"loads.axle_train.train: unknown train 'X'.*HSLM-A10"):
+        build_loads({"target": "girder", "axle_train": {"train": "X", "speed_kmh": 100}}, model)
+    with pytest.raises(ValueError, match="remove wheel_load_N"):
+        build_loads({"target": "girder", "axle_train": {"train": "HSLM-A1", "speed_kmh": 100,
+                                                        "wheel_load_N": 8.5e4}}, model)
+
+
 SWEEP_KMH = np.arange(120.0, 421.0, 15.0)
 
 

@@ -36,6 +36,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
                         "add the monitors of the EN 1990 A2 deck checks to a case"),
     "trains": ("ttbpipe.trains.cli",
                "the train library (HSLM-A1..A10 of EN 1991-2): list it, write a train's axles"),
+    "contact-geometry": ("ttbpipe.vehicle.cli_contact_geometry",
+                         "wheel-rail contact geometry of real profiles vs lateral displacement, "
+                         "EN 15302 equivalent conicity"),
 }
 
 

@@ -90,7 +90,10 @@ def axle_train_loads(train: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
         if clash:
             raise ValueError(f"loads.axle_train: train {train['train']!r} gives the axles and "
                              f"loads; remove {', '.join(clash)}")
-        named = get_train(str(train["train"]))
+        try:
+            named = get_train(str(train["train"]))
+        except ValueError as err:
+            raise ValueError(f"loads.axle_train.train: {err}") from None
         return np.asarray(named.positions_m, float), np.asarray(named.axle_loads_N) / 2.0
     if "wheel_load_N" not in train:
         raise ValueError("loads.axle_train: give wheel_load_N (with axle_positions_m or a car "

@@ -50,14 +50,14 @@ class Train:
         return self.total_load_N / STANDARD_GRAVITY
 
 
-def hslm_a_axles(N: int, D: float, d: float, power_car_offsets=(0.0, 3.0, 14.0, 17.0),
-                 gap: float = 3.525) -> np.ndarray:
+def hslm_a_axles(N: int, D: float, d: float, power_car_offsets, gap: float) -> np.ndarray:
     """Axle positions (m, first axle at 0) of an HSLM-A train, EN 1991-2:2003 Figure E.1.
 
-    Leading power car (axles at ``power_car_offsets``), ``gap`` to the end coach's own bogie
-    (axle spacing d), N + 1 articulated bogies (spacing d) whose centres are D apart, the first
-    D behind the point ``gap/2`` behind the power car's last axle, then the trailing end coach
-    and power car, mirror images of the leading ones. 2N + 14 axles over 2 (17 + gap/2) + (N + 2) D.
+    Leading power car (axles at ``power_car_offsets``; 0, 3, 14, 17 m in ``hslm.yaml``), ``gap``
+    (3.525 m) to the end coach's own bogie (axle spacing d), N + 1 articulated bogies (spacing d)
+    whose centres are D apart, the first D behind the point ``gap/2`` behind the power car's last
+    axle, then the trailing end coach and power car, mirror images of the leading ones:
+    2N + 14 axles over 2 (17 + gap/2) + (N + 2) D.
     """
     pc = np.asarray(power_car_offsets, dtype=float)
     joint = pc[-1] + gap / 2.0                       # power car / end coach coupling point
