@@ -24,6 +24,7 @@ include: "workflow/rules/study.smk"
 include: "workflow/rules/report.smk"
 include: "workflow/rules/reliability.smk"
 include: "workflow/rules/cases.smk"
+include: "workflow/rules/en1991.smk"
 
 
 rule all:

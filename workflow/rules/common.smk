@@ -143,6 +143,8 @@ def all_targets() -> list[str]:
     """Every final output of the stages that exist (a paper case: only the case's outputs)."""
     if config.get("case"):
         return case_targets()  # workflow/rules/cases.smk
+    if config.get("en1991"):
+        return en1991_targets()  # workflow/rules/en1991.smk
     targets = [results_path("figures/psd_vs_standard.png")]
     targets += expand(results_path("psd/{date}.parquet"), date=CAMPAIGNS)
     targets.append(results_path("fields/samples.parquet"))

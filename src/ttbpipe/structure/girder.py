@@ -26,6 +26,7 @@ from scipy import linalg
 
 from .damping import span_damping_matrix
 from .shape_functions import hermite, hermite_shape  # noqa: F401  (girder users import it from here)
+from .shape_functions import hermite_slope_shape
 
 
 def hermite_beam_matrices(L: float, EI: float, m: float) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +91,15 @@ class SpanReduction:
         lin = np.stack([1.0 - xi, xi], axis=1)
         rr = np.einsum("kj,kjn->kn", lin, self.basis[2][e[:, None] + np.arange(2)])
         return rz, ry, rr
+
+
+def span_slope_row(red: "SpanReduction", x_m: float) -> np.ndarray:
+    """Row (n,) giving the slope dz/dx of the girder axis at global x from q (+: rising with x)."""
+    s = np.clip(x_m - red.start_m, 0.0, red.length_m)
+    n_el = red.node_x.size - 1
+    h = red.length_m / n_el
+    e = min(int(s / h), n_el - 1)
+    return hermite_slope_shape((s - e * h) / h, h) @ red.basis[0][2 * e:2 * e + 4]
 
 
 def _craig_bampton(K: np.ndarray, M: np.ndarray, boundary: list[int], f_max_hz: float,

@@ -18,13 +18,16 @@ import numpy as np
 from numba import njit
 
 from .rail_mesh import NODE_DOFS, rail_mesh
+from .girder import span_slope_row
 from .shape_functions import hermite_shape
 
 QUANTITIES = {"displacement": 0, "velocity": 1, "acceleration": 2}
 _SUFFIX = {("z", 0): ("disp_mm", 1e3), ("z", 1): ("vel_m_s", 1.0), ("z", 2): ("acc_m_s2", 1.0),
            ("y", 0): ("disp_mm", 1e3), ("y", 1): ("vel_m_s", 1.0), ("y", 2): ("acc_m_s2", 1.0),
            ("roll", 0): ("disp_mrad", 1e3), ("roll", 1): ("vel_rad_s", 1.0),
-           ("roll", 2): ("acc_rad_s2", 1.0)}
+           ("roll", 2): ("acc_rad_s2", 1.0),
+           ("slope", 0): ("mrad", 1e3), ("slope", 1): ("rad_s", 1.0),
+           ("slope", 2): ("rad_s2", 1.0)}
 
 
 @dataclass
@@ -140,7 +143,9 @@ def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
         e = float(spec.get("lateral_offset_m", 0.0))
         h = (float(model.config["girder"]["deck_height_m"]) if spec.get("deck_surface")
              else float(spec.get("height_m", 0.0)))
-        return {"z": (idx, rz + e * rr), "y": (idx, ry - h * rr), "roll": (idx, rr)}
+        # slope: dz/dx of the girder axis (the end rotation at the supports, EN 1991-2 6.5.4)
+        return {"z": (idx, rz + e * rr), "y": (idx, ry - h * rr), "roll": (idx, rr),
+                "slope": (idx, span_slope_row(red, x))}
     if kind == "pier":
         p = int(spec.get("pier", 0))
         if not 0 <= p < model.dof_info["n_piers"]:
@@ -162,7 +167,8 @@ def compile_monitors(model, specs: Sequence[Mapping[str, Any]]) -> MonitorSet:
         rows = point_rows(model, spec)
         for direction in spec.get("directions", ["z"]):
             if direction not in rows:
-                raise ValueError(f"monitor {name}: direction {direction!r}; expected z | y | roll")
+                raise ValueError(f"monitor {name}: direction {direction!r}; expected one of "
+                                 f"{sorted(rows)}")
             for q in spec.get("quantities", ["displacement", "acceleration"]):
                 if q not in QUANTITIES:
                     raise ValueError(f"monitor {name}: quantity {q!r}; expected one of "

@@ -25,3 +25,11 @@ def hermite(xi, L):
 def hermite_shape(xi: float, L: float) -> np.ndarray:
     """:func:`hermite` as an array (for the assembly's and the monitors' vector arithmetic)."""
     return np.array(hermite(float(xi), float(L)))
+
+
+def hermite_slope_shape(xi: float, L: float) -> np.ndarray:
+    """dN/dx of :func:`hermite` at ``xi``: the slope w' from (w_a, w'_a, w_b, w'_b)."""
+    xi = float(xi)
+    L = float(L)
+    return np.array([(-6.0 * xi + 6.0 * xi * xi) / L, 1.0 - 4.0 * xi + 3.0 * xi * xi,
+                     (6.0 * xi - 6.0 * xi * xi) / L, 3.0 * xi * xi - 2.0 * xi])
