@@ -156,3 +156,31 @@ def test_speed_grid_and_summary_checks():
     assert "HSLM-A1" in out["summary"] and "Figure 6.9" in out["summary"]
     with pytest.raises(ValueError, match="unknown key"):
         settings({"en1991": {"speed": 3}})
+
+
+@pytest.mark.slow
+def test_en1991_study_runs_through_the_workflow(tmp_path):
+    """`snakemake --configfile config/en1991.yaml` (two trains, a coarse grid) in a scratch copy:
+    one job per train and one report job, the page and the tables under results/en1991/, and
+    only the study's own outputs."""
+    import subprocess
+    import sys
+
+    from test_workflow import _copy_repository
+
+    _copy_repository(tmp_path)
+    (tmp_path / "small.yaml").write_text(
+        "en1991: {trains: [HSLM-A1, HSLM-A4], speed_min_kmh: 300.0, speed_step_kmh: 40.0}\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--cores", "2", "--configfile", "config/en1991.yaml",
+         "small.yaml"], cwd=tmp_path, capture_output=True, text=True, timeout=900)
+    log = proc.stdout + proc.stderr
+    assert proc.returncode == 0, log[-3000:]
+    assert log.count("rule en1991_train:") == 2 and log.count("rule en1991_report:") == 1
+    out = tmp_path / "results" / "en1991"
+    summary = (out / "summary.md").read_text()
+    assert "**dynamic analysis required**" in summary and "HSLM-A4" in summary
+    checks = pd.read_parquet(out / "checks.parquet")
+    assert list(checks["span_m"]) == [32.0]
+    assert sorted(p.name for p in (tmp_path / "results").iterdir()) == ["en1991"]
+    assert len(list((out / "figures").glob("*.png"))) == 3
