@@ -65,7 +65,8 @@ def schema(name: str = STUDY_SCHEMA) -> dict:
     """A packaged schema; the case schema with the vehicle dataclasses' parameter names."""
     doc = _read_schema(name)
     if name == CASE_SCHEMA:
-        from .vehicle.parameters import ContactParameters, CouplerParameters, CarParameters
+        from .vehicle.parameters import (CONTACT_PROFILES, CarParameters, ContactParameters,
+                                         CouplerParameters)
 
         car = {"type": "object", "additionalProperties": False,
                "properties": {k: v for k, v in _dataclass_properties(CarParameters).items()
@@ -75,7 +76,7 @@ def schema(name: str = STUDY_SCHEMA) -> dict:
         defs["coupler_parameters"] = {"type": "object", "additionalProperties": False,
                                       "properties": _dataclass_properties(CouplerParameters)}
         contact = _dataclass_properties(ContactParameters)
-        contact["profile"] = {"type": "string", "enum": ["conical", "table"]}
+        contact["profile"] = {"type": "string", "enum": list(CONTACT_PROFILES)}
         defs["contact_parameters"] = {"type": "object", "additionalProperties": False,
                                       "properties": contact}
     return doc

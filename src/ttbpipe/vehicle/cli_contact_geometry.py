@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-from pathlib import Path
 
 log = logging.getLogger(__name__)
 
@@ -58,12 +57,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _profile(text: str, kind: str):
-    from .profiles import read_profile, reference_profile
+    from .profiles import profile_by_name_or_path
 
-    path = Path(text)
-    if path.suffix or path.exists():
-        return read_profile(path, kind=kind)
-    return reference_profile(text)
+    return profile_by_name_or_path(text, kind)
 
 
 def run(args: argparse.Namespace) -> int:

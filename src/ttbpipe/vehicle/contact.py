@@ -166,11 +166,13 @@ SCALAR_NAMES = ("hertz_g", "shear_modulus", "youngs_modulus", "poisson", "fricti
 
 
 def _fill_ellipse_and_kalker(table: np.ndarray, wheel_transverse_radius: np.ndarray,
-                             rail_head_radius: float) -> None:
-    """Columns m, n, A+B and C11..C33 from the rolling radius and the transverse radii."""
+                             rail_head_radius) -> None:
+    """Columns m, n, A+B and C11..C33 from the rolling radius and the transverse radii
+    (``rail_head_radius``: one value, or one per row)."""
+    rail_radius = np.broadcast_to(np.asarray(rail_head_radius, dtype=float), table.shape[:1])
     for i in range(table.shape[0]):
         curv_a = 0.5 / table[i, COL_R]                           # wheel rolling, rail straight
-        curv_b = 0.5 * (1.0 / rail_head_radius + 1.0 / wheel_transverse_radius[i])
+        curv_b = 0.5 * (1.0 / rail_radius[i] + 1.0 / wheel_transverse_radius[i])
         if curv_b <= 0:
             raise ValueError(f"contact table row {i}: non-positive lateral curvature sum {curv_b}"
                              " (wheel hollow tighter than the rail head: conformal contact)")
@@ -268,9 +270,31 @@ def _geometry(table: np.ndarray, p: ContactParameters, tread: str, desc: str) ->
         flange_stiffness=p.flange_stiffness, rail_head_height=p.rail_head_height, description=desc)
 
 
+def profiles_geometry(p: ContactParameters) -> ContactGeometry:
+    """Geometry from a real wheel and rail profile pair (:mod:`ttbpipe.vehicle.profile_contact`):
+    the flange is part of the table, so the flange spring is off; the worn-tread Hertz law."""
+    import dataclasses
+
+    from .profile_contact import profile_table
+
+    raw, pair = profile_table(p)
+    n = raw.shape[0]
+    table = np.zeros((n, N_COLS))
+    table[:, COL_Y], table[:, COL_R], table[:, COL_DZ], table[:, COL_DELTA] = raw[:, :4].T
+    _fill_ellipse_and_kalker(table, raw[:, 4], raw[:, 5])
+    tread = "worn" if p.hertz_law in ("auto", "worn") else "cone"
+    desc = (f"profiles {p.wheel_profile} on {p.rail_profile} at {p.rail_inclination}, gauge "
+            f"{1e3 * p.gauge_m:g} mm, flange back {1e3 * p.flange_back_m:g} mm")
+    return _geometry(table, dataclasses.replace(p, flange_stiffness=0.0), tread, desc)
+
+
 def build_geometry(p: ContactParameters) -> ContactGeometry:
-    """Contact geometry for the configured profile (conical or table)."""
-    return conical_geometry(p) if p.profile == "conical" else table_geometry(p)
+    """Contact geometry for the configured profile (conical, table or profiles)."""
+    if p.profile == "conical":
+        return conical_geometry(p)
+    if p.profile == "profiles":
+        return profiles_geometry(p)
+    return table_geometry(p)
 
 
 def creep_coefficients(geom: "ContactGeometry", load: float,

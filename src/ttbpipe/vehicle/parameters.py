@@ -116,7 +116,7 @@ class ContactParameters:
 
     wheel_radius: float = 0.43            # [V] physics.md 0.43-0.46 m
     contact_half_distance: float = 0.7465  # [V] 2a ~ 1.493 m (Hindawi ACE 2020)
-    profile: str = "conical"              # conical | table
+    profile: str = "conical"              # conical | table | profiles
     conicity: float = 0.04                # [M] equivalent conicity 0.02-0.05 (EN 15302 range)
     profile_table: str | None = None      # CSV/Parquet path when profile == "table"; None -> demo
     rail_head_radius: float = 0.30        # [M] CHN60 head crown radius
@@ -128,6 +128,17 @@ class ContactParameters:
     flange_clearance: float = 9.1e-3      # [M] Knudsen, Feldberg & True 1991 wheelset model
     flange_stiffness: float = 1.823e7     # [M] same source: F = k0 (y - delta), k0 1.823e7 N/m
     rail_head_height: float = 0.10        # [A] lever of the lateral force about the rail's axis
+    # profile == "profiles": a wheel and rail profile pair (ttbpipe.vehicle.profile_contact;
+    # names as `ttbpipe contact-geometry` takes them, or point files)
+    wheel_profile: str = "s1002"          # EN 13715 S1002
+    rail_profile: str = "60e1"            # EN 13674-1 60E1
+    rail_inclination: str = "1:40"        # 1:20 | 1:40 | none
+    gauge_m: float = 1.435                # nominal gauge, measured 14 mm below the rail top
+    flange_back_m: float = 1.360          # flange-back spacing of the wheelset
+
+
+#: Contact geometries: a cone (closed form), a tabulated file, a wheel and rail profile pair.
+CONTACT_PROFILES = ("conical", "table", "profiles")
 
 
 @dataclass
@@ -212,6 +223,7 @@ def train_from_config(cfg: Mapping[str, Any] | None) -> TrainParameters:
         cars.append(car)
     coupler = _apply_overrides(CouplerParameters(), cfg.get("coupler", {}) or {}, "train.coupler")
     contact = _apply_overrides(ContactParameters(), cfg.get("contact", {}) or {}, "train.contact")
-    if contact.profile not in ("conical", "table"):
-        raise ValueError(f"train.contact.profile: {contact.profile!r} is not 'conical' or 'table'")
+    if contact.profile not in CONTACT_PROFILES:
+        raise ValueError(f"train.contact.profile: {contact.profile!r}; expected one of "
+                         f"{CONTACT_PROFILES}")
     return TrainParameters(cars=cars, coupler=coupler, contact=contact)

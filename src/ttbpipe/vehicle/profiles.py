@@ -306,6 +306,15 @@ def reference_profile(name: str) -> Profile:
                    source=f"{_SOURCES[key]} (ttbpipe/data/profiles/{key}.txt)")
 
 
+def profile_by_name_or_path(text: str, kind: str) -> Profile:
+    """A shipped reference profile by name, or a measured profile file (a path with a suffix or
+    an existing file) read with :func:`read_profile` as a ``kind`` (wheel | rail)."""
+    path = Path(str(text))
+    if path.suffix or path.exists():
+        return read_profile(path, kind=kind)
+    return reference_profile(str(text))
+
+
 _NUM = re.compile(r"^[\s]*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 
 
