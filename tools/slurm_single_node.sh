@@ -84,6 +84,8 @@ AccountingStorageEnforce=associations
 JobAcctGatherType=jobacct_gather/linux
 JobAcctGatherFrequency=30
 JobCompType=jobcomp/none
+# sacct shows the --comment the executor plugin sets (rule and wildcards of each job)
+AccountingStoreFlags=job_comment
 $node State=UNKNOWN
 PartitionName=$PARTITION Nodes=$HOST Default=YES MaxTime=INFINITE State=UP
 EOF
