@@ -42,7 +42,8 @@ die() { log "FAIL: $*"; exit 1; }
 
 "$PYTHON" -c "import ttbpipe, snakemake, snakemake_executor_plugin_slurm, dask_jobqueue" \
     || die "$PYTHON lacks ttbpipe, snakemake, the SLURM plugin or dask-jobqueue: pip install -c requirements.lock.txt -e \"$REPO[test,cluster]\""
-# the job scripts call `python -m snakemake`: the environment must come first on PATH
+# the SLURM job scripts re-run Snakemake with this interpreter (sys.executable, sbatch
+# --export=ALL); the environment first on PATH also for anything the rules call by name
 export PATH="$(dirname "$PYTHON"):$PATH"
 
 started_cluster=0
