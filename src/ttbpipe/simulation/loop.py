@@ -29,9 +29,8 @@ from ..structure.kernels import structure_accelerations
 from ..structure.monitors import no_monitors, record_monitors
 from ..structure.rail_mesh import add_rail_head_load, rail_head_kinematics
 from ..timestepping.zhai import zhai_predict
-from ..vehicle.dynamics import VehicleWork, vehicle_accelerations
+from ..vehicle.dynamics import _work, vehicle_accelerations
 from ..vehicle.contact import N_COLS
-from ..vehicle.kernels import N_WHEEL_OUT
 from ..decimation import flush
 from .recorder import (TrainRecorder, record_step_channels, record_vehicle_output,
                        record_wheel_output, record_wheel_step, train_recorder)
@@ -74,7 +73,8 @@ def _evaluate(t, state, vehicle, work, packed, mesh, track, speed, creep_relax, 
     for w in range(ws_x.shape[0]):
         ws_x[w] = vehicle.ws_x0[w] + speed * t
     track_kinematics(mesh, track, state.disp, state.vel, ws_x, speed, rail_kin)
-    vehicle_accelerations(vehicle, work, state.q, state.v, rail_kin, speed, creep_relax, state.a)
+    vehicle_accelerations(vehicle, work, state.q, state.v, rail_kin, speed, creep_relax, state.a,
+                          ws_x[0])
     nodal_force = state.nodal_force
     for i in range(nodal_force.shape[0]):
         nodal_force[i] = 0.0
@@ -99,9 +99,7 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
     n_ws = vehicle.ws_dofs.shape[0]
     ws_x = np.zeros(n_ws)
     rail_kin = np.zeros((n_ws, 2, 4))
-    work = VehicleWork(np.zeros(state.q.shape[0]), np.zeros((n_ws, 2, N_WHEEL_OUT)),
-                       np.zeros(N_COLS), np.zeros(N_WHEEL_OUT),
-                       np.zeros((n_ws, 2)))
+    work = _work(state.q.shape[0], n_ws, N_COLS)
     q, v, a, a_prev = state.q, state.v, state.a, state.a_prev
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
     _evaluate(0.0, state, vehicle, work, packed, mesh, track, speed, 0.0, ws_x, rail_kin)

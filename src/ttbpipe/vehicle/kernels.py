@@ -34,18 +34,21 @@ def _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, ro
     (explicit creep law; see :func:`train_contact`)."""
     creep_state = np.zeros((ws_dofs.shape[0], 2))
     train_contact(q, v, ws_dofs, (table, scal), speed, rail_kin, force, wheel,
-                  (row, tmp, creep_state), 0.0)
+                  (row, tmp, creep_state), 0.0, np.zeros(ws_dofs.shape[0]))
 
 
 @njit(cache=True)
-def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratch, creep_relax):
+def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratch, creep_relax,
+                  frame_yaw_rate):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``.
 
     ``geometry`` = (table, scalars) of the contact (ttbpipe.vehicle.contact); ``scratch`` =
     (row, tmp, creep_state): a geometry-table row, the wheel's output row, and
     ``creep_state[ws, side]``, the semi-implicit lateral creepage of the previous step, updated
     in place; ``creep_relax`` = m_eff^-1 dt / V (0: explicit law); see
-    :func:`ttbpipe.vehicle.contact._wheel_contact`.
+    :func:`ttbpipe.vehicle.contact._wheel_contact`. ``frame_yaw_rate[ws]``: the yaw rate of
+    the wheelset's track frame, V kappa on a curve (ttbpipe.vehicle.curving), added to the
+    wheelset's own yaw rate in the longitudinal and spin creepages.
 
     A contact at (0, s a0, -r) from the wheelset centre with force (F_x, F_y, F_z) and spin moment
     M about the normal gives: y += F_y, z += F_z, roll += s a0 F_z + r F_y, pitch (spin)
@@ -66,7 +69,8 @@ def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratc
             side = 1.0 if k == 0 else -1.0
             creep_state[w, k] = _wheel_contact(
                 side, table, scal, speed,
-                (q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip], v[iw]),
+                (q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip],
+                 v[iw] + frame_yaw_rate[w]),
                 (rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3]),
                 row, tmp, creep_state[w, k], creep_relax)
             fx = tmp[0]
