@@ -110,18 +110,20 @@ def _rail_kin_at(mesh, disp, ws_x, irr: Irregularity) -> np.ndarray:
 
 
 def static_equilibrium(model, geom, speed, mesh, structure_static, irr, ws_x,
-                       tol_load: float = 1e-3, max_iter: int = 30):
+                       tol_load: float = 1e-3, max_iter: int = 30, curve=None):
     """Train + structure static state: fixed point between the vehicle Newton solve and the
     structure's linear static solve (the rails are ~100x stiffer than the primary suspension, so
     it converges in a few iterations; it stops when the wheel loads change by less than
     ``tol_load`` N). Returns (q, v, disp, wheel, iterations); v is zero except the wheelsets'
-    steady spin rates."""
+    steady spin rates. ``curve``: the track layout's terms (ttbpipe.vehicle.curving), the
+    steady state on the curve at the train's start."""
     n_s = 0 if structure_static is None else int(structure_static.n)
     disp = np.zeros(n_s)
     prev = None
     for it in range(1, max_iter + 1):
         rail_kin = _rail_kin_at(mesh, disp, ws_x, irr)
-        q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin)
+        q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin, curve=curve,
+                                           x_lead=float(ws_x[0]))
         if structure_static is None:
             return q, v, disp, wheel, it
         force = np.zeros(n_s)
@@ -132,7 +134,8 @@ def static_equilibrium(model, geom, speed, mesh, structure_static, irr, ws_x,
         loads = wheel[:, :, 2]
         if prev is not None and np.max(np.abs(loads - prev)) < tol_load:
             rail_kin = _rail_kin_at(mesh, disp, ws_x, irr)
-            q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin)
+            q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin, curve=curve,
+                                           x_lead=float(ws_x[0]))
             return q, v, disp, wheel, it
         prev = loads
     raise RuntimeError(f"train-structure static equilibrium did not converge in {max_iter} "
@@ -247,7 +250,9 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
                                  x_end + speed * dt * out_every + 1.0, x_lead0, profile=track)
     ws_x = x_lead0 + model.wheelset_x
     sstatic = StructureStatic(structure) if structure is not None else None
-    q0, v0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, mesh, sstatic, irr, ws_x)
+    from ..vehicle.curving import curve_arrays
+    q0, v0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, mesh, sstatic, irr, ws_x,
+                                                      curve=curve_arrays(model, sim.get("layout")))
     f_const = model.gravity_force + model.coupler_stiffness @ q0
     creep_relax = (limits["lateral_creep_inverse_mass_1_kg"] * dt / speed
                    if lateral_creep == "semi_implicit" else 0.0)

@@ -29,12 +29,13 @@ def csr_matvec_sub(indptr, indices, data, x, out):
 
 
 @njit(cache=True)
-def _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp):
+def _train_contact(q, v, ws_dofs, table, scal, speed, rail_kin, force, wheel, row, tmp,
+                   frame_yaw_rate):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``
     (explicit creep law; see :func:`train_contact`)."""
     creep_state = np.zeros((ws_dofs.shape[0], 2))
     train_contact(q, v, ws_dofs, (table, scal), speed, rail_kin, force, wheel,
-                  (row, tmp, creep_state), 0.0, np.zeros(ws_dofs.shape[0]))
+                  (row, tmp, creep_state), 0.0, frame_yaw_rate)
 
 
 @njit(cache=True)
@@ -87,10 +88,13 @@ def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratc
                 wheel[w, k, c] = tmp[c]
 
 
-def contact_forces(q, v, ws_dofs, geom, speed, rail_kin):
-    """Python wrapper: (generalised force vector, wheel table) for the whole train."""
+def contact_forces(q, v, ws_dofs, geom, speed, rail_kin, frame_yaw_rate=None):
+    """Python wrapper: (generalised force vector, wheel table) for the whole train;
+    ``frame_yaw_rate[ws]``: the track frames' yaw rates on a curve (None: tangent track)."""
     force = np.zeros(q.size)
     wheel = np.zeros((ws_dofs.shape[0], 2, N_WHEEL_OUT))
+    if frame_yaw_rate is None:
+        frame_yaw_rate = np.zeros(ws_dofs.shape[0])
     _train_contact(q, v, ws_dofs, geom.table, geom.scalars(), float(speed), rail_kin, force, wheel,
-                   np.zeros(N_COLS), np.zeros(N_WHEEL_OUT))
+                   np.zeros(N_COLS), np.zeros(N_WHEEL_OUT), np.asarray(frame_yaw_rate, dtype=float))
     return force, wheel

@@ -84,8 +84,8 @@ def rail_following_guess(model: TrainModel, geom, rail_kin: np.ndarray) -> np.nd
 
 
 def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.ndarray | None = None,
-                         tol_disp: float = 1e-11, max_iter: int = 60
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                         tol_disp: float = 1e-11, max_iter: int = 60, curve=None,
+                         x_lead: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Static (steady rolling) state: vehicle DOFs q (m, rad), velocities v and the wheel table.
 
     ``rail_kin`` (n_ws, 2, 4): rail-head z, dz/dt, y, dy/dt at each wheel (zeros: perfect rigid
@@ -94,6 +94,11 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
     creep moment about each axle to vanish (with rails deflected under load the rolling radii
     change slightly). All other velocities are 0. Raises RuntimeError naming the remedy when
     Newton does not converge.
+
+    ``curve`` (ttbpipe.vehicle.curving.CurveArrays, active) with the lead wheelset at chainage
+    ``x_lead``: the steady state on the curve there, with the track frames' loads and the
+    suspension on q + q_track as in the time loop (a run that starts on a curve starts in
+    equilibrium).
     """
     n = model.n_dof
     n_ws = model.n_wheelsets
@@ -105,10 +110,19 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
     q = rail_following_guess(model, geom, rail_kin)
     v = np.zeros(n)
     f_g = model.gravity_force
+    yaw_rate = None
+    if curve is not None and curve.scal[0] > 0.0:
+        max_iter = max(max_iter, 200)
+        from .curving import curve_frame
+
+        q_track, v_track, f_track = np.zeros(n), np.zeros(n), np.zeros(n)
+        yaw_rate = np.zeros(n_ws)
+        curve_frame(curve, float(x_lead), float(speed), q_track, v_track, f_track, yaw_rate)
+        f_g = f_g + f_track - k_susp @ q_track - model.damping @ v_track
     eps_q, eps_v = 1e-7, 1e-5
     step = np.full(n, np.inf)
     for it in range(max_iter):
-        f_c, wheel = contact_forces(q, v, model.wheelset_dofs, geom, speed, rail_kin)
+        f_c, wheel = contact_forces(q, v, model.wheelset_dofs, geom, speed, rail_kin, yaw_rate)
         resid = f_g + f_c - k_susp @ q
         # block-diagonal contact Jacobian by finite differences, one wheelset DOF kind at a time
         # (the spin column is the derivative with respect to the spin RATE)
@@ -118,8 +132,10 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
             dv = np.zeros(n)
             eps = eps_v if k == PITCH else eps_q
             (dv if k == PITCH else dq)[model.wheelset_dofs[:, k]] = eps
-            f_p, _ = contact_forces(q + dq, v + dv, model.wheelset_dofs, geom, speed, rail_kin)
-            f_m, _ = contact_forces(q - dq, v - dv, model.wheelset_dofs, geom, speed, rail_kin)
+            f_p, _ = contact_forces(q + dq, v + dv, model.wheelset_dofs, geom, speed, rail_kin,
+                                    yaw_rate)
+            f_m, _ = contact_forces(q - dq, v - dv, model.wheelset_dofs, geom, speed, rail_kin,
+                                    yaw_rate)
             df = (f_p - f_m) / (2 * eps)
             for w in range(n_ws):
                 d = model.wheelset_dofs[w]
@@ -131,10 +147,17 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
         if not np.all(np.isfinite(step)):
             raise RuntimeError("static equilibrium: singular Jacobian (a wheel without contact or "
                                "an unsupported body); check the suspension parameters and wheel loads")
+        if yaw_rate is not None:
+            # on a curve the lateral equilibrium rests on creep forces that saturate: Newton
+            # steps are limited to 1 mm / 1 mrad laterally and in yaw (more iterations, no
+            # overshoot into the flange)
+            largest = max(np.max(np.abs(step[0::DOF_PER_BODY])), np.max(np.abs(step[4::DOF_PER_BODY])))
+            if largest > 1e-3:
+                step = step * (1e-3 / largest)
         q[~spin] += step[~spin]
         v[spin] += step[spin]
         if np.max(np.abs(step[~spin])) < tol_disp and np.max(np.abs(step[spin])) < 1e-9:
-            f_c, wheel = contact_forces(q, v, model.wheelset_dofs, geom, speed, rail_kin)
+            f_c, wheel = contact_forces(q, v, model.wheelset_dofs, geom, speed, rail_kin, yaw_rate)
             log.debug("vehicle static equilibrium in %d Newton iterations", it + 1)
             return q, wheel, v
     raise RuntimeError(f"static equilibrium: Newton did not converge in {max_iter} iterations "
