@@ -4,7 +4,7 @@ References: the steady-state lateral equilibrium of a vehicle on a curve (every 
 centripetal force m V^2 / R in the horizontal plane; in the canted track plane the rails supply
 m (V^2/R cos theta - g sin theta), the cant deficiency force; Iwnicki (ed.), Handbook of Railway
 Vehicle Dynamics, 2006), and the pure-rolling line of a coned wheelset (Wickens,
-Fundamentals of Rail Vehicle Dynamics, 2003, sec. 2.2: on a curve of radius R a wheelset rolls
+Fundamentals of Rail Vehicle Dynamics, 2003, the classical kinematic result: on a curve of radius R a wheelset rolls
 without longitudinal creep at the outward offset y = r0 a0 / (lambda R)).
 """
 

@@ -6,7 +6,7 @@ plane of the canted rails). On tangent track these are the model's usual axes. O
 frame turns (heading Psi(x), curvature kappa = dPsi/dx, + = curving to the left) and rolls with
 the cant (angle theta(x) of the track plane about x, + = left rail up; a left curve raises the
 right rail, theta < 0). Three groups of terms follow (seed paper eqs. 28-30; Iwnicki (ed.),
-Handbook of Railway Vehicle Dynamics, 2006, ch. 10 "track-following coordinates"):
+Handbook of Railway Vehicle Dynamics, 2006, on track-following coordinates):
 
 * inertial loads of the moving frame on every body of mass m, roll inertia I_x, yaw inertia I_z
   (track axes): F_y = -m (V^2 kappa cos theta + g sin theta) (centrifugal minus the cant's share
