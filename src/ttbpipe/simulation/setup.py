@@ -53,6 +53,7 @@ from ..vehicle.contact import ContactGeometry, build_geometry
 from ..vehicle.dynamics import VehicleArrays, vehicle_arrays
 from ..vehicle.model import TrainModel, build_train_model
 from ..vehicle.parameters import TrainParameters, train_from_config
+from ..vehicle.curving import curve_arrays
 from ..vehicle.static import solve_vehicle_static
 from .loop import track_kinematics
 
@@ -250,9 +251,9 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
                                  x_end + speed * dt * out_every + 1.0, x_lead0, profile=track)
     ws_x = x_lead0 + model.wheelset_x
     sstatic = StructureStatic(structure) if structure is not None else None
-    from ..vehicle.curving import curve_arrays
+    curve = curve_arrays(model, sim.get("layout"))
     q0, v0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, mesh, sstatic, irr, ws_x,
-                                                      curve=curve_arrays(model, sim.get("layout")))
+                                                      curve=curve)
     f_const = model.gravity_force + model.coupler_stiffness @ q0
     creep_relax = (limits["lateral_creep_inverse_mass_1_kg"] * dt / speed
                    if lateral_creep == "semi_implicit" else 0.0)
@@ -268,8 +269,7 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
     return CoupledSetup(train=train, model=model, geom=geom, speed=speed, dt=dt, n_steps=n_steps,
                         out_every=out_every, x_lead0=x_lead0, irregularity=irr, structure=structure,
                         packed=packed, mesh=mesh, monitors=monitors,
-                        vehicle=vehicle_arrays(model, geom, f_const, x_lead0,
-                                               sim.get("layout")), q0=q0, v0=v0,
+                        vehicle=vehicle_arrays(model, geom, f_const, x_lead0, curve), q0=q0, v0=v0,
                         disp0=disp0, static_wheel=wheel0, dt_limits=limits,
                         static_iterations=iters, creep_relax=creep_relax,
                         irregularity_info=irr_info,

@@ -111,7 +111,7 @@ def layout_knots(layout: Mapping[str, Any] | None) -> tuple[np.ndarray, np.ndarr
 
 def _integrate_knots(xs: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Heading and lateral offset at the knots, integrating the piecewise-linear curvature
-    exactly from 0 at x = 0 (the knots' far ends are tangent, so the origin is arbitrary)."""
+    exactly from 0 at the first knot (re-referenced to x = 0 by :func:`curve_arrays`)."""
     heading = np.zeros(xs.size)
     offset = np.zeros(xs.size)
     for i in range(xs.size - 1):
@@ -119,17 +119,7 @@ def _integrate_knots(xs: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.nda
         dk = (ks[i + 1] - ks[i]) / s
         heading[i + 1] = heading[i] + ks[i] * s + 0.5 * dk * s * s
         offset[i + 1] = offset[i] + heading[i] * s + 0.5 * ks[i] * s * s + dk * s ** 3 / 6.0
-    # re-reference to x = 0 to keep the numbers small near the model
-    h0, y0 = _frame_values(xs, ks, heading, offset, 0.0)
-    return heading - h0, offset - y0 - h0 * xs
-
-
-def _frame_values(xs, ks, heading, offset, x):
-    i = int(np.clip(np.searchsorted(xs, x, side="right") - 1, 0, xs.size - 2))
-    s = x - xs[i]
-    dk = (ks[i + 1] - ks[i]) / (xs[i + 1] - xs[i])
-    return (heading[i] + ks[i] * s + 0.5 * dk * s * s,
-            offset[i] + heading[i] * s + 0.5 * ks[i] * s * s + dk * s ** 3 / 6.0)
+    return heading, offset
 
 
 def curve_arrays(model, layout: Mapping[str, Any] | None) -> CurveArrays:
@@ -157,11 +147,14 @@ def curve_arrays(model, layout: Mapping[str, Any] | None) -> CurveArrays:
             inv_r.append(1.0 / r0 if b in WHEELSETS else 0.0)
             height.append(pos[b, 2])
     active = 1.0 if np.any(ks != 0.0) or np.any(ts != 0.0) else 0.0
-    return CurveArrays(xs, ks, ts, heading, offset, np.asarray(dof0, dtype=np.int64),
-                       np.asarray(bx), np.asarray(mass), np.asarray(iz), np.asarray(ispin),
-                       np.asarray(inv_r), np.asarray(height), np.asarray(ws_body, dtype=np.int64),
-                       np.array([active, STANDARD_GRAVITY,
-                                 float(layout.get("cant_base_m", CANT_BASE_M))]))
+    curve = CurveArrays(xs, ks, ts, heading, offset, np.asarray(dof0, dtype=np.int64),
+                        np.asarray(bx), np.asarray(mass), np.asarray(iz), np.asarray(ispin),
+                        np.asarray(inv_r), np.asarray(height), np.asarray(ws_body, dtype=np.int64),
+                        np.array([active, STANDARD_GRAVITY,
+                                  float(layout.get("cant_base_m", CANT_BASE_M))]))
+    # re-reference heading and offset to x = 0, keeping the numbers small near the model
+    _, _, _, _, h0, y0 = _frame_at(curve, 0.0)
+    return curve._replace(heading=heading - h0, offset=offset - y0 - h0 * xs)
 
 
 def no_curve(model) -> CurveArrays:
@@ -205,6 +198,7 @@ def curve_frame(curve, x_lead, speed, q_track, v_track, f_track, ws_yaw_rate):
     half_base = 0.5 * curve.scal[2]
     k_l, dk_l, th_l, dth_l, psi_l, y_l = _frame_at(curve, x_lead)
     v2 = speed * speed
+    w = 0
     for b in range(curve.body_dof0.shape[0]):
         x = x_lead + curve.body_x[b]
         kappa, dk, theta, dth, psi, y = _frame_at(curve, x)
@@ -231,10 +225,10 @@ def curve_frame(curve, x_lead, speed, q_track, v_track, f_track, ws_yaw_rate):
         f_track[d + 2] = spin_momentum * speed * kappa
         f_track[d + 3] = 0.0
         f_track[d + 4] = -curve.body_yaw_inertia[b] * v2 * dk - spin_momentum * speed * dth
-    for w in range(curve.ws_body.shape[0]):
-        b = curve.ws_body[w]
-        kappa, dk, theta, dth, psi, y = _frame_at(curve, x_lead + curve.body_x[b])
-        ws_yaw_rate[w] = speed * kappa
+        if curve.body_inv_radius[b] > 0.0:
+            # wheelsets come in the model's order (ws_body is increasing)
+            ws_yaw_rate[w] = speed * kappa
+            w += 1
 
 
 def frame_at(curve: CurveArrays, x: float) -> dict:

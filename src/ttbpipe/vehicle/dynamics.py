@@ -50,11 +50,11 @@ def _work(n_dof, n_ws, n_cols):
 
 
 def vehicle_arrays(model, geom, f_const: np.ndarray, x_lead0: float,
-                   layout=None) -> VehicleArrays:
+                   curve=None) -> VehicleArrays:
     """:class:`VehicleArrays` of a train model, its contact geometry and constant loads, with
-    the leading wheelset at ``x_lead0`` at t = 0, on the track ``layout`` (``simulation.layout``:
-    curves and cant, ttbpipe.vehicle.curving; None: tangent track)."""
-    from .curving import curve_arrays
+    the leading wheelset at ``x_lead0`` at t = 0, on the track layout's ``curve``
+    (:class:`ttbpipe.vehicle.curving.CurveArrays`; None: tangent track)."""
+    from .curving import no_curve
 
     k, c = model.stiffness, model.damping
     return VehicleArrays(
@@ -62,7 +62,7 @@ def vehicle_arrays(model, geom, f_const: np.ndarray, x_lead0: float,
         c.indptr.astype(np.int64), c.indices.astype(np.int64), c.data,
         np.asarray(f_const, dtype=float), model.wheelset_dofs,
         x_lead0 + np.asarray(model.wheelset_x, dtype=float), geom.table, geom.scalars(),
-        curve_arrays(model, layout))
+        no_curve(model) if curve is None else curve)
 
 
 def vehicle_work(vehicle: VehicleArrays) -> VehicleWork:
