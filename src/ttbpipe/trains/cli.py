@@ -26,9 +26,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.list:
         table = library_table()
-        print(f"{'name':10s} {'axles':>5s} {'length_m':>9s} {'load_kN':>8s} {'mass_t':>7s}  source")
+        print(f"{'name':12s} {'axles':>5s} {'length_m':>9s} {'load_kN':>8s} {'mass_t':>7s}  source")
         for r in table.itertuples():
-            print(f"{r.name:10s} {r.n_axles:5d} {r.length_m:9.3f} {r.total_load_kN:8.0f} "
+            print(f"{r.name:12s} {r.n_axles:5d} {r.length_m:9.3f} {r.total_load_kN:8.0f} "
                   f"{r.mass_t:7.1f}  {r.source}")
         return 0
     if not args.name:

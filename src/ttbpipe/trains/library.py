@@ -1,10 +1,12 @@
 """The train library: named trains as ordered axles (position behind the first axle, static load).
 
 The data ship with the package (``ttbpipe/trains/*.yaml``, declared in pyproject's package-data);
-each file states where every number comes from. At present: the ten universal trains HSLM-A1 ...
-HSLM-A10 of EN 1991-2:2003 Annex E (``hslm.yaml``: Table E.1 for N, D, d, P; Figure E.1 for the
-power cars and end coaches). SI inside: positions in m, axle loads in N (Table E.1's kN are
-converted on reading). ``Train.mass_kg`` is the static load over the standard gravity.
+each file states where every number comes from: the ten universal trains HSLM-A1 ... HSLM-A10 of
+EN 1991-2:2003 Annex E (``hslm.yaml``: Table E.1 for N, D, d, P; Figure E.1 for the power cars
+and end coaches), then the real trains of ``real_trains.yaml`` (axle tables of the Spanish IAPF-07
+Appendix C.2; a car-by-car description of the AVE S-103 / Velaro E). SI inside: positions in m,
+axle loads in N (the files' kN and t are converted on reading). ``Train.mass_kg`` is the static
+load over the standard gravity.
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ import pandas as pd
 
 from ..constants import STANDARD_GRAVITY
 
-__all__ = ["Train", "train_names", "get_train", "hslm_a_axles", "axle_table", "library_table"]
+__all__ = ["Train", "train_names", "get_train", "hslm_a_axles", "car_train_axles", "axle_table",
+           "library_table"]
 
 
 @dataclass(frozen=True)
@@ -72,6 +75,31 @@ def hslm_a_axles(N: int, D: float, d: float, power_car_offsets, gap: float) -> n
     return pos
 
 
+def car_train_axles(cars) -> tuple[np.ndarray, np.ndarray]:
+    """Axle positions (m, first axle at 0) and static axle loads (N) of a train of bogie cars.
+
+    ``cars`` in running order, each a mapping with ``front_m`` (car end to its first bogie
+    centre), ``bogie_centres_m``, ``rear_m`` (last bogie centre to the car end), ``wheelbase_m``
+    and the masses ``body_kg``, ``bogie_kg`` (one bogie frame), ``wheelset_kg``. Adjacent cars
+    touch at their ends. Every axle of a car carries g (m_body / 4 + m_bogie / 2 + m_wheelset):
+    the body, its centre of gravity midway between the bogie centres, rests half on each bogie,
+    each bogie half on each wheelset (statics of the two-level suspension).
+    """
+    pos, load = [], []
+    start = 0.0
+    for car in cars:
+        a = float(car["wheelbase_m"]) / 2.0
+        c1 = start + float(car["front_m"])
+        c2 = c1 + float(car["bogie_centres_m"])
+        pos += [c1 - a, c1 + a, c2 - a, c2 + a]
+        axle_kg = (float(car["body_kg"]) / 4.0 + float(car["bogie_kg"]) / 2.0
+                   + float(car["wheelset_kg"]))
+        load += 4 * [axle_kg * STANDARD_GRAVITY]
+        start = c2 + float(car["rear_m"])
+    pos = np.asarray(pos)
+    return pos - pos[0], np.asarray(load)
+
+
 def _read_yaml(name: str) -> dict:
     import yaml
 
@@ -93,11 +121,27 @@ def _library() -> dict[str, Train]:
         trains[name] = Train(name, pos, loads, hslm["standard"],
                              {"N": int(row["N"]), "D_m": float(row["D_m"]),
                               "d_m": float(row["d_m"]), "P_N": float(row["P_kN"]) * 1e3})
+    real = _read_yaml("real_trains.yaml")["trains"]
+    for name, row in real.items():
+        if "axles" in row:
+            table = np.asarray(row["axles"], dtype=float)
+            pos, loads = table[:, 0] - table[0, 0], table[:, 1] * 1e3
+        elif "cars" in row:
+            pos, loads = car_train_axles(row["cars"])
+        else:                               # units of a train described above, coupled end to end
+            unit = real[row["units"]["of"]]
+            pos, loads = car_train_axles(list(unit["cars"]) * int(row["units"]["count"]))
+        pos.setflags(write=False)
+        loads.setflags(write=False)
+        trains[name] = Train(name, pos, loads, str(row["source"]),
+                             {"D_m": float(row["spacing_m"]),
+                              "composition": str(row["composition"]),
+                              "reference": " ".join(str(row["reference"]).split())})
     return trains
 
 
 def train_names() -> list[str]:
-    """Names in library order (HSLM-A1 ... HSLM-A10)."""
+    """Names in library order (HSLM-A1 ... HSLM-A10, then the real trains)."""
     return list(_library())
 
 
