@@ -291,13 +291,15 @@ def _fe_first_lateral_hz(cfg: dict, track: str) -> float:
 def _rayleigh_sway_hz(cfg: dict, track: str) -> float:
     """Closed-form Rayleigh quotient (an upper bound of the lowest lateral-torsional frequency):
     every pier in the static shape of a cantilever under a tip force, y = u (3 s^2 - s^3) / 2
-    (s = z/h; strain energy 3EI/h^3 u^2 / 2, kinetic mass 33/140 m h: Rayleigh's cantilever,
-    Clough & Penzien, Dynamics of Structures, 2nd ed., s. 8-2), top roll theta = -3u/(2h); the
+    (s = z/h; strain energy 3EI/h^3 u^2 / 2, kinetic mass 33/140 m h: Rayleigh's method with the
+    static deflection shape, e.g. Clough & Penzien, Dynamics of Structures), top roll
+    theta = -3u/(2h); the
     girders rigid in plan and rolling with the pier tops (roll 0 at the abutments, linear over
     the end spans, uniform over interior spans), their axis at u - h_b theta at the piers so
     that no bearing is strained; strain energy: the piers and the twist GJ/L theta^2 / 2 of the
-    end spans. The shape lies in both models' spaces (linear girder fields, cubic piers), so the
-    quotient bounds both from above (Rayleigh's principle)."""
+    end spans. The shape lies in the spaces of the model without track and of the second method
+    without track or with the track as rigid mass (linear girder fields, cubic piers), so the
+    quotient bounds their lowest frequency from above (Rayleigh's principle)."""
     g, brg, p = cfg["girder"], cfg["bearing"], cfg["pier"]
     spans = [float(x) for x in cfg["layout"]["spans_m"]]
     h, u = float(p["height_m"]), 1.0
