@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 from scipy.sparse import csc_matrix
 from scipy.sparse.linalg import eigsh
 
-from ttbpipe.structure import apply_factors, build_structure
+from ttbpipe.structure import build_structure
 from ttbpipe.structure.modal import modal_analysis
 from ttbpipe.structure.pier import reduce_pier
 from ttbpipe.structure.properties import PIER
