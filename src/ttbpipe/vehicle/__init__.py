@@ -13,6 +13,8 @@
   accelerations and wheel forces out);
 * :mod:`.static` -- gravity-loaded equilibrium of the train on given rail heights;
 * :mod:`.stability` -- the Zhai step limit of the suspension's own modes;
+* :mod:`.hunting` -- linear hunting stability on rigid straight track: eigenvalues against speed,
+  critical speed, closed forms (Klingel, Wickens);
 * :mod:`.comfort` -- Sperling ride index.
 
 The coupled run is :func:`ttbpipe.simulation.coupled.run_coupled`. See docs/vehicle.md.
