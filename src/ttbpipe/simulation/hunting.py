@@ -31,27 +31,19 @@ from .setup import prepare
 
 log = logging.getLogger(__name__)
 
-#: Length of one loop run (s): a run is integrated in pieces of this length, each continuing
-#: from the last state of the previous one with the wheelsets' spin angles set back to zero.
-#: Why: on a hunting limit cycle the mean rolling radius differs from r0, so the spin angle
-#: perturbation (the wheelset "pitch" DOF, on which nothing depends) drifts linearly, and the
-#: loop's divergence check (any |q| above 0.5) would stop the run after a few seconds.
-CHUNK_S = 0.5
-
-
 def hunting_case(contact: Mapping[str, Any] | None, speed_kmh: float,
                  time_step_s: float = 1.0e-4, composition: tuple[str, ...] = ("trailer",),
-                 train: Mapping[str, Any] | None = None) -> dict:
+                 train: Mapping[str, Any] | None = None, duration_s: float = 1.0) -> dict:
     """A case on rigid perfect track: ``composition`` cars with ``train.contact`` = ``contact``
-    (further ``train`` keys in ``train``) at ``speed_kmh``, one piece of :data:`CHUNK_S`,
-    output at every step."""
+    (further ``train`` keys in ``train``) at ``speed_kmh`` for ``duration_s``, output at every
+    step."""
     train_cfg = dict(train or {})
     train_cfg["composition"] = list(composition)
     if contact:
         train_cfg["contact"] = dict(contact)
     return {"train": train_cfg,
             "simulation": {"track": "rigid", "speed_kmh": float(speed_kmh),
-                           "duration_s": CHUNK_S, "time_step_s": float(time_step_s),
+                           "duration_s": float(duration_s), "time_step_s": float(time_step_s),
                            "output_every": 1},
             "irregularity": {"source": "none"}}
 
@@ -77,9 +69,10 @@ def disturbed_run(case: Mapping[str, Any], duration_s: float, lateral_m: float =
                   start: tuple[np.ndarray, np.ndarray] | None = None) -> HuntingRun:
     """Run ``case`` (:func:`hunting_case`) for ``duration_s`` from its static state with the
     leading wheelset moved laterally by ``lateral_m``, or from ``start`` = (q, v) (a previous
-    run's end: continuation). Integrated in pieces of :data:`CHUNK_S`; between pieces the
-    velocities come from a second-order backward difference of the last three steps (error
-    (omega dt)^2 / 3: 4e-5 at 10 Hz, 3e-3 for the 150 Hz Hertz modes, which are at rest)."""
+    run's final displacements and velocities: continuation at another speed). The wheelsets'
+    spin angles start at zero (nothing depends on them; the loop does not count them as
+    displacements)."""
+    case = {**case, "simulation": {**case["simulation"], "duration_s": float(duration_s)}}
     setup = prepare(case)
     ws_y = setup.model.wheelset_dofs[:, 0]
     spin = setup.model.wheelset_dofs[:, 3]
@@ -89,21 +82,12 @@ def disturbed_run(case: Mapping[str, Any], duration_s: float, lateral_m: float =
     else:
         q, v = setup.q0.copy(), setup.v0.copy()
         q[ws_y[0]] += lateral_m
-    n_chunks = max(1, int(np.ceil(duration_s / CHUNK_S - 1e-9)))
-    chunk_t = setup.n_steps * setup.dt
-    times, lateral, wall = [], [], 0.0
-    for k in range(n_chunks):
-        q[spin] = 0.0
-        setup.q0, setup.v0 = q, v
-        raw = integrate(setup)
-        hist = raw.q
-        first = 0 if k == 0 else 1         # row 0 repeats the previous piece's last row
-        times.append(raw.time[first:] + k * chunk_t)
-        lateral.append(hist[first:, ws_y] - q_static[ws_y])
-        q = hist[-1].copy()
-        v = (3.0 * hist[-1] - 4.0 * hist[-2] + hist[-3]) / (2.0 * setup.dt)
-        wall += raw.wall_s
-    return HuntingRun(np.concatenate(times), np.concatenate(lateral), q, v, q_static, wall)
+    q[spin] = 0.0
+    setup.q0, setup.v0 = q, v
+    raw = integrate(setup)
+    lateral = raw.q[:, ws_y] - q_static[ws_y]
+    return HuntingRun(raw.time, lateral, raw.final.q.copy(), raw.final.v.copy(), q_static,
+                      raw.wall_s)
 
 
 def growth_rate(time: np.ndarray, signal: np.ndarray, t_start: float) -> tuple[float, float]:

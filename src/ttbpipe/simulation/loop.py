@@ -11,7 +11,8 @@ step and histories at output steps (:mod:`ttbpipe.simulation.recorder`,
 :func:`ttbpipe.structure.monitors.record_monitors`). Seed paper sections 2.2.11, eqs. 28-31.
 
 Stops (status): 0 ok, 1 non-finite state, 2 every wheel off the rail at one step, 3 vehicle
-divergence (a displacement above 0.5 m); :class:`SimulationStopped` words them with their likely
+divergence (a displacement above 0.5 m; the wheelsets' spin angles are not displacements and are
+not checked); :class:`SimulationStopped` words them with their likely
 cause.
 """
 
@@ -142,6 +143,7 @@ class RawResult:
     train: TrainRecorder
     monitors: object           # ttbpipe.structure.monitors.MonitorRecorder
     wall_s: float
+    final: CoupledState | None = None   # the state after the last step (a run continues from it)
 
     @property
     def time(self) -> np.ndarray:
@@ -216,7 +218,7 @@ def integrate(setup) -> RawResult:
                          np.zeros(n_s))
     monitors = setup.monitors.recorder() if setup.monitors is not None else no_monitors()
     train = train_recorder(n_out, m.n_wheelsets, n_v, monitors.qty.shape[0], setup.out_every,
-                           *history_dofs(m))
+                           *history_dofs(m), spin_dofs=m.wheelset_dofs[:, 3])
     t0 = time.perf_counter()
     status, step = _coupled_loop(state, setup.vehicle, setup.packed, setup.mesh,
                                  setup.irregularity, monitors, train, setup.speed, setup.dt,
@@ -224,4 +226,4 @@ def integrate(setup) -> RawResult:
     wall = time.perf_counter() - t0
     if status != 0:
         raise SimulationStopped(setup, status, step, train.contact_loss, state.q)
-    return RawResult(train, monitors, wall)
+    return RawResult(train, monitors, wall, state)

@@ -34,9 +34,13 @@ from ..decimation import push
 #: with an anti-alias filter: the monitors, then F_x, F_y, F_z of every wheel, then the
 #: accelerations of ``acc_dofs`` and the displacements of ``disp_dofs`` (``values``: the current
 #: step's, ``dec``: the decimator and its output rows).
+#: ``displacement_dofs``: 1 for the vehicle DOFs whose size the loop's divergence check watches,
+#: 0 for the wheelsets' spin angles (their "pitch" DOF: a rotation on top of the rolling, on
+#: which no force depends and which drifts whenever the mean rolling radius differs from r0,
+#: e.g. on a hunting limit cycle or in a curve).
 TrainRecorder = namedtuple("TrainRecorder", ["t_out", "wheel_hist", "q_hist", "a_hist",
                                              "wheel_peak", "h_peak", "contact_loss", "acc_dofs",
-                                             "disp_dofs", "values", "dec"])
+                                             "disp_dofs", "values", "dec", "displacement_dofs"])
 
 #: Columns of wheel_hist.
 WHEEL_HISTORY_COLUMNS = ("F_x", "F_y", "F_z", "y_rel", "N")
@@ -45,8 +49,10 @@ WHEEL_FORCE_CHANNELS = (0, 1, 2)
 
 
 def train_recorder(n_out: int, n_wheelsets: int, n_dof: int, n_monitors: int, out_every: int,
-                   acc_dofs: np.ndarray, disp_dofs: np.ndarray) -> TrainRecorder:
-    """Empty records (peaks at their neutral values, no contact loss)."""
+                   acc_dofs: np.ndarray, disp_dofs: np.ndarray,
+                   spin_dofs: np.ndarray | None = None) -> TrainRecorder:
+    """Empty records (peaks at their neutral values, no contact loss); ``spin_dofs``: the
+    wheelsets' spin-angle DOFs, left out of the divergence check."""
     from ..decimation import decimator
 
     wheel_peak = np.zeros((n_wheelsets, 2, 4))
@@ -57,10 +63,14 @@ def train_recorder(n_out: int, n_wheelsets: int, n_dof: int, n_monitors: int, ou
     disp_dofs = np.asarray(disp_dofs, dtype=np.int64)
     n_channels = (n_monitors + 2 * n_wheelsets * len(WHEEL_FORCE_CHANNELS) + acc_dofs.size
                   + disp_dofs.size)
+    displacement_dofs = np.ones(n_dof, dtype=np.int64)
+    if spin_dofs is not None:
+        displacement_dofs[np.asarray(spin_dofs, dtype=np.int64)] = 0
     return TrainRecorder(np.zeros(n_out), np.zeros((n_out, n_wheelsets, 2, 5)),
                          np.zeros((n_out, n_dof)), np.zeros((n_out, n_dof)), wheel_peak,
                          np.zeros(n_wheelsets), contact_loss, acc_dofs, disp_dofs,
-                         np.zeros(n_channels), decimator(n_channels, n_out, out_every))
+                         np.zeros(n_channels), decimator(n_channels, n_out, out_every),
+                         displacement_dofs)
 
 
 def decimated(rec: TrainRecorder, n_monitors: int) -> dict[str, np.ndarray]:
@@ -159,7 +169,7 @@ def record_wheel_step(rec, wheel, step):
 @njit(cache=True)
 def record_vehicle_output(rec, row, t, q, a):
     """The vehicle's displacements and accelerations of one output step; returns (finite, the
-    largest |displacement|), for the loop's divergence checks."""
+    largest |displacement| over ``rec.displacement_dofs``), for the loop's divergence checks."""
     rec.t_out[row] = t
     big = 0.0
     for i in range(q.shape[0]):
@@ -167,7 +177,7 @@ def record_vehicle_output(rec, row, t, q, a):
         rec.a_hist[row, i] = a[i]
         if not np.isfinite(q[i]) or not np.isfinite(a[i]):
             return False, big
-        if abs(q[i]) > big:
+        if rec.displacement_dofs[i] != 0 and abs(q[i]) > big:
             big = abs(q[i])
     return True, big
 
