@@ -160,8 +160,10 @@ def rigid_packed():
 def _structure(case: Mapping[str, Any], factors: Mapping[str, np.ndarray] | None):
     from ..structure import apply_factors, build_structure
     from ..structure.random_properties import property_factors
+    from ..vehicle.curving import cant_knots
 
-    structure = build_structure(case.get("structure") or {})
+    layout = (case.get("simulation") or {}).get("layout")
+    structure = build_structure(case.get("structure") or {}, cant=cant_knots(layout))
     if factors is None:
         factors = property_factors(case.get("properties"), structure)
     if factors:

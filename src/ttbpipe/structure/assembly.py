@@ -55,6 +55,7 @@ class StructureModel:
     link_kinds: list                 # kind of each CSR link (bearing, pier)
     triple_kinds: list = field(default_factory=list)   # "ca" per triple (pads: pad_*, ballast: bal_*)
     piers: list = field(default_factory=list)   # PierReduction per pier of a given height
+    cant: tuple | None = None        # (x knots m, cant angle knots rad) of the track on the deck
 
     @property
     def n_dof(self) -> int:
@@ -82,14 +83,25 @@ class StructureModel:
 
 
 def build_structure(config: Mapping[str, Any] | None = None,
-                    factors: Mapping[str, np.ndarray] | None = None) -> StructureModel:
-    """Build the structure from a ``structure:`` config section (defaults fill missing keys)."""
+                    factors: Mapping[str, np.ndarray] | None = None,
+                    cant: tuple[np.ndarray, np.ndarray] | None = None) -> StructureModel:
+    """Build the structure from a ``structure:`` config section (defaults fill missing keys).
+
+    ``cant``: the track's cant angle along x as knots (x m, angle rad; + = left rail up),
+    piecewise linear (:func:`ttbpipe.vehicle.curving.cant_knots` of ``simulation.layout``). The
+    track (rails, pads, slab) is then modelled in the canted track plane and the CA mortar joins
+    it to the level girder through the rotation of the deck's motion into that plane (docstring
+    of :func:`_ca_deck_rows`); None or all zero: level track.
+    """
     cfg = P.resolve(config)
     layout = make_layout(cfg)
     props = nominal_properties(cfg, layout)
     if factors:
         props = factored(props, factors)
-    return _assemble(cfg, layout, props)
+    if cant is not None:
+        xk, tk = (np.asarray(a, dtype=float) for a in cant)
+        cant = None if not np.any(tk != 0.0) else (xk, tk)
+    return _assemble(cfg, layout, props, cant)
 
 
 def apply_factors(model_or_properties, factors: Mapping[str, np.ndarray]):
@@ -102,12 +114,37 @@ def apply_factors(model_or_properties, factors: Mapping[str, np.ndarray]):
     """
     if isinstance(model_or_properties, StructureModel):
         m = model_or_properties
-        return _assemble(m.config, m.layout, factored(m.properties, factors))
+        return _assemble(m.config, m.layout, factored(m.properties, factors), m.cant)
     return factored(model_or_properties, factors)
 
 
-def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> StructureModel:
-    """DOF numbering, lumped masses, beams, links and span blocks -> StructureModel."""
+def _ca_deck_rows(rz: np.ndarray, ry: np.ndarray, rr: np.ndarray, e_track: float,
+                  h_deck: float, theta: float) -> tuple[np.ndarray, np.ndarray]:
+    """Rows (over a span's DOFs) of the deck's vertical and lateral motion under the track's
+    centre line, in the track plane's axes.
+
+    The deck point at lateral offset e (``e_track``) and height h (``h_deck``) above the shear
+    centre moves by z = (rz + e rr) q vertically and y = (ry - h rr) q laterally (paper eq. 24;
+    rz, ry, rr: the girder's vertical, lateral and roll rows at that x). A track canted by theta
+    (+ = left rail up) has its normal z_t and in-plane lateral y_t axes rotated about x:
+    z_t = z cos theta - y sin theta, y_t = y cos theta + z sin theta, so the CA mortar (normal
+    and in-plane springs between the slab and the deck) carries the track-plane loads of the
+    train into the girder's vertical and lateral directions: on a curve at balanced cant the
+    wheel forces are normal to the track plane and the girder receives the weight downwards
+    and the centrifugal force outwards. Roll is unchanged. theta = 0 returns the level rows as
+    they were (bit for bit)."""
+    z = rz + e_track * rr
+    y = ry - h_deck * rr
+    if theta == 0.0:
+        return z, y
+    c, s = np.cos(theta), np.sin(theta)
+    return c * z - s * y, c * y + s * z
+
+
+def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
+              cant: tuple[np.ndarray, np.ndarray] | None = None) -> StructureModel:
+    """DOF numbering, lumped masses, beams, links and span blocks -> StructureModel
+    (``cant``: as :func:`build_structure`)."""
     cfg = copy.deepcopy(cfg)
     lay = cfg["layout"]
     rail_c, fas, slab_c, g_c = cfg["rail"], cfg["fastener"], cfg["slab"], cfg["girder"]
@@ -335,9 +372,11 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                     s, rz, ry, rr = g
                     o = span_dof0[s]
                     idx = list(range(o, o + spans[s].n))
-                    # the deck under the track's centre line: z + e roll (paper eq. 24)
-                    zd, zc = zd + idx, zc + list(-(rz + e_track * rr))
-                    yd, yc = yd + idx, yc + list(-(ry - h_deck * rr))
+                    # the deck under the track's centre line (paper eq. 24), in the track plane
+                    theta = 0.0 if cant is None else float(np.interp(x, cant[0], cant[1]))
+                    deck_z, deck_y = _ca_deck_rows(rz, ry, rr, e_track, h_deck, theta)
+                    zd, zc = zd + idx, zc + list(-deck_z)
+                    yd, yc = yd + idx, yc + list(-deck_y)
                     rdofs, rc = rdofs + idx, rc + list(-rr)
                 links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)],
                                  (kz * w, ky * w, kz * w * b2), (cz * w, cy * w, cz * w * b2),
@@ -425,4 +464,4 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray]) -> Str
                           spans=spans, piers=piers, dof_info=info, slab_elements=slab_x,
                           slab_element_node0=node_a, fixed=fixed,
                           link_kinds=[links.kind[i] for i in links.order],
-                          triple_kinds=list(links.tri_kind))
+                          triple_kinds=list(links.tri_kind), cant=cant)

@@ -26,9 +26,16 @@ Handbook of Railway Vehicle Dynamics, 2006, on track-following coordinates):
   outwards) and in the spin creepage; and the gyroscopic moments of the rolling wheelsets from
   the frame's turning, I_spin (V/r0) V kappa in roll and -I_spin (V/r0) V dtheta/dx in yaw.
 
+On the structure the track (rails, pads, slab) lies in the canted track plane, so the wheel
+forces, which the contact gives in track axes, act on it as they are, and the CA mortar carries
+them into the level girder through the cant's rotation (:func:`cant_knots`,
+``ttbpipe.structure.build_structure(cant=...)``): at balanced cant the girder receives the
+train's weight downwards and its centrifugal force outwards. The ground under the approaches is
+rigid, so the track's springs to it need no rotation.
+
 Not modelled: the frame's roll acceleration V^2 d^2theta/dx^2 (zero on linear cant ramps
-except at their ends), vertical curves, the structure's curvature (the girder and rails stay
-straight; on bridges with R >> span the track-frame loads are what matters), and the
+except at their ends), vertical curves, the structure's curvature in plan (the girder and rails
+stay straight; on bridges with R >> span the track-frame loads are what matters), and the
 gyroscopic coupling of the wheelsets' own yaw and roll rates on tangent track.
 
 Configuration (``simulation.layout``)::
@@ -107,6 +114,13 @@ def layout_knots(layout: Mapping[str, Any] | None) -> tuple[np.ndarray, np.ndarr
             xs.append(x); ks.append(k); ts.append(t)
     xs.append(max(_FAR_M, xs[-1] + 1.0)); ks.append(0.0); ts.append(0.0)
     return np.array(xs), np.array(ks), np.array(ts)
+
+
+def cant_knots(layout: Mapping[str, Any] | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """(chainage, cant angle) knots of a ``simulation.layout`` section for the structure
+    (:func:`ttbpipe.structure.build_structure`'s ``cant``); None when the layout has no cant."""
+    xs, _, ts = layout_knots(layout)
+    return (xs, ts) if np.any(ts != 0.0) else None
 
 
 def _integrate_knots(xs: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
