@@ -38,7 +38,7 @@ def estimate_failure_probability(g: Callable[[np.ndarray], np.ndarray], n_dims: 
 
     ``method="subset"``: options of :class:`SubsetSettings` (``n_per_level``,
     ``level_probability``, ``max_levels``, ``target_acceptance``, ``initial_scale``,
-    ``confidence_level``). ``method="monte_carlo"``: ``n_samples``, ``batch_size``,
+    ``confidence_level``, ``lineage_lag``). ``method="monte_carlo"``: ``n_samples``, ``batch_size``,
     ``confidence_level``, ``interval`` (``"wilson"`` or ``"clopper-pearson"``). The result
     depends only on ``seed``, the method and its options (ttbpipe.streams, RARE_EVENT).
     """

@@ -26,14 +26,21 @@ advance in lockstep, so each chain step is one vectorised evaluation of ``Nc`` c
 ``lambda`` is adapted after every step from that step's acceptance; a level starts from the
 previous level's final ``lambda`` (restarting at 0.6 was measured no better).
 
-Coefficient of variation (Au & Beck 2001, eqs. 19-29): for a level estimate ``p_j`` from N
-correlated chain states, ``delta_j^2 = (1 - p_j)/(N p_j) (1 + gamma_j)``, with
+Coefficient of variation. Per level, Au & Beck (2001, eqs. 19-29): for a level estimate
+``p_j`` from N correlated chain states, ``delta_j^2 = (1 - p_j)/(N p_j) (1 + gamma_j)``, with
 ``gamma_j = 2 sum_{k=1}^{Ns-1} (1 - k Nc/N) rho_j(k)`` and ``rho_j(k)`` the lag-k correlation of
 the indicator ``1[g <= b_{j+1}]`` along the chains (eq. 27, estimated from the chains); gamma = 0
-at level 0. The estimate's c.o.v. is ``delta^2 = sum_j delta_j^2`` (levels taken as
-uncorrelated, Au & Beck's eq. 29 lower bound; the upper bound ``(sum_j delta_j)^2`` of full
-correlation is kept in ``details``). The interval is lognormal with that c.o.v.
-(:func:`ttbpipe.reliability.result.lognormal_interval`).
+at level 0 (the levels table's ``cov``). Summing ``delta_j^2`` over the levels (Au & Beck's
+uncorrelated-levels value, ``details["cov_au_beck"]``) misses the correlation that the chains
+carry from level to level: a level's seeds are states of the previous level's chains, so an
+excess of deep states in one lineage shows again in its descendants. The reported c.o.v. is
+therefore :func:`lineage_variance`'s: the first-order (delta-method) expansion
+``ln P_hat - ln P = sum_j sum_i (I_ji - p_j)/(N p_j)`` with the states grouped by their ancestor
+chain ``lag`` levels back, groups independent, states within a group arbitrarily correlated
+(a cluster-robust variance over lineages). The fully correlated upper bound
+``(sum_j delta_j)^2`` is kept in ``details["cov_upper_bound"]``. The interval is lognormal with
+the reported c.o.v. (:func:`ttbpipe.reliability.result.lognormal_interval`).
+docs/reliability.md section 10 has the measured coverage of both.
 
 Determinism: level-0 point i is drawn from ``SeedSequence([seed, RARE_EVENT, RARE_EVENT_SUBSET,
 0, i])``; the chain started from the c-th seed of level j (seeds in ascending g, ties by index)
@@ -63,11 +70,12 @@ from .. import streams
 from .monte_carlo import evaluate_limit_state
 from .result import FailureProbability, lognormal_interval
 
-__all__ = ["SubsetSettings", "SubsetSimulation", "subset_simulation", "indicator_gamma"]
+__all__ = ["SubsetSettings", "SubsetSimulation", "subset_simulation", "indicator_gamma",
+           "lineage_variance"]
 
 log = logging.getLogger(__name__)
 
-STATE_VERSION = 1
+STATE_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -77,7 +85,9 @@ class SubsetSettings:
     ``n_per_level`` N and ``level_probability`` p0 (N p0 and 1/p0 integers; Au & Beck recommend
     p0 = 0.1, Zuev et al. 2012 show 0.1-0.3 near-optimal); ``max_levels`` stops a run that does
     not reach the failure domain; ``target_acceptance`` and ``initial_scale`` (lambda) of the
-    aCS sampler (Papaioannou et al. 2015: 0.44, 0.6).
+    aCS sampler (Papaioannou et al. 2015: 0.44, 0.6); ``lineage_lag``, how many levels back the
+    c.o.v. groups the states by common ancestor (:func:`lineage_variance`; 2 measured best,
+    docs/reliability.md section 10).
     """
 
     n_per_level: int = 1000
@@ -86,6 +96,7 @@ class SubsetSettings:
     target_acceptance: float = 0.44
     initial_scale: float = 0.6
     confidence_level: float = 0.95
+    lineage_lag: int = 2
 
     def __post_init__(self) -> None:
         p0, n = float(self.level_probability), int(self.n_per_level)
@@ -99,6 +110,8 @@ class SubsetSettings:
             raise ValueError("target_acceptance must be in (0, 1) and initial_scale > 0")
         if int(self.max_levels) < 1:
             raise ValueError("max_levels must be >= 1")
+        if int(self.lineage_lag) < 0:
+            raise ValueError("lineage_lag must be >= 0")
 
     @property
     def n_chains(self) -> int:
@@ -128,6 +141,71 @@ def indicator_gamma(indicator: np.ndarray) -> float:
         r_k = float(np.sum(ind[:-k] * ind[k:])) / (n - k * n_chains) - p * p
         gamma += 2.0 * (1.0 - k * n_chains / n) * (r_k / r0)
     return float(gamma)
+
+
+def _chain_ids(level: int, n_states: int, n_chains: int) -> np.ndarray:
+    """Chain of each state of a level: level 0 points are their own chains; at level j >= 1 row
+    ``t * Nc + c`` is state t of chain c."""
+    ids = np.arange(n_states)
+    return ids if level == 0 else ids % n_chains
+
+
+def lineage_variance(indicators: list[np.ndarray], parents: list[np.ndarray | None],
+                     probabilities: list[float], n_chains: int, lag: int = 2) -> float:
+    """Variance of ``ln P_hat`` of subset simulation from the lineages of its states.
+
+    ``indicators[j]``: level j's indicator ``1[g <= b_{j+1}]`` (the last level: ``1[g <= 0]``),
+    rows as in :func:`_chain_ids`; ``parents[j]`` (j >= 1): for each chain of level j, the chain
+    of level j-1 its seed was a state of (level 0: the point's index); ``probabilities[j]``: the
+    level's estimate ``p_j``.
+
+    First order (delta method), ``ln P_hat - ln P = sum_j Z_j``, ``Z_j = sum_i z_ji``,
+    ``z_ji = (I_ji - p_j)/(N p_j)`` (Au & Beck 2001, eq. 19: the level's relative error). The
+    states are grouped by their ancestor chain at level ``a = max(0, j - lag)``; groups are taken
+    as independent and the states within one group as arbitrarily correlated, so that
+    ``Var = sum_j sum_{j <= j' <= j + lag} (2 - [j = j']) K/(K-1) sum_k W_jk W_j'k``, with
+    ``W_jk`` the sum of ``z_ji`` over the states of level j descending from chain k of level a and
+    K the number of groups. This is the cluster-robust ("sandwich") variance of Liang & Zeger
+    (1986, Biometrika 73:13, with the small-sample factor K/(K-1)) with the clusters chosen, as
+    in the lag-based variance estimators of particle systems (Olsson & Douc 2019, Bernoulli
+    25:1504), by the ancestor a fixed number of generations back, which keeps enough groups
+    where the grouping by the first generation (Chan & Lai 2013, Ann. Stat. 41:2877; Lee &
+    Whiteley 2018, Biometrika 105:609) would leave a handful. With ``lag = 0`` the groups are the
+    chains of each level alone, close to Au & Beck's uncorrelated-levels value. ``inf`` when a
+    level estimate is 0.
+    """
+    m = len(indicators)
+    if m == 0:
+        return float("nan")
+    z = []
+    for j in range(m):
+        p = float(probabilities[j])
+        if not p > 0.0:
+            return float("inf")
+        ind = np.asarray(indicators[j], dtype=float)
+        z.append((ind - p) / (ind.size * p))
+
+    def ancestors(j: int, a: int) -> np.ndarray:
+        ids = _chain_ids(j, z[j].size, n_chains)
+        for k in range(j, a, -1):
+            ids = np.asarray(parents[k])[ids]
+        return ids
+
+    total = 0.0
+    for j in range(m):
+        a = max(0, j - int(lag))
+        ids_j = ancestors(j, a)
+        for jp in range(j, min(m, j + int(lag) + 1)):
+            ids_jp = ids_j if jp == j else ancestors(jp, a)
+            size = int(max(ids_j.max(), ids_jp.max())) + 1
+            w_j = np.bincount(ids_j, weights=z[j], minlength=size)
+            w_jp = np.bincount(ids_jp, weights=z[jp], minlength=size)
+            groups = int(np.count_nonzero(np.bincount(ids_j, minlength=size)
+                                          + np.bincount(ids_jp, minlength=size)))
+            factor = groups / (groups - 1.0) if groups > 1 else 1.0
+            term = factor * float(np.dot(w_j, w_jp))
+            total += term if jp == j else 2.0 * term
+    return max(total, 0.0)
 
 
 def _generator_state(rng: np.random.Generator) -> dict[str, Any]:
@@ -173,6 +251,10 @@ class SubsetSimulation:
         self._accepted: list[float] = []
         self._levels: list[dict[str, Any]] = []
         self._final: dict[str, Any] | None = None
+        # lineage of the closed levels, for the c.o.v. (lineage_variance): each level's indicator
+        # and, from level 1 on, the previous-level chain of each chain's seed
+        self._indicators: list[np.ndarray] = []
+        self._parents: list[np.ndarray | None] = [None]
 
     # --- the machine ----------------------------------------------------------------------
     def ask(self) -> np.ndarray:
@@ -267,6 +349,7 @@ class SubsetSimulation:
                     "on a plateau of g (a g that is constant over a region, e.g. a clipped or "
                     "saturated index): give g a continuous measure of the distance to failure")
         gamma = 0.0 if self.level == 0 else indicator_gamma(indicator.reshape(s.chain_length, nc))
+        self._indicators.append(indicator.copy())
         if p_level > 0.0:
             delta = float(np.sqrt((1.0 - p_level) / (self._g.size * p_level) * (1.0 + gamma)))
         else:
@@ -289,6 +372,8 @@ class SubsetSimulation:
             self.done = True
             return
         seeds = order[:nc]
+        # the chain each seed belongs to (level 0: the point itself), for lineage_variance
+        self._parents.append(seeds.copy() if self.level == 0 else seeds % nc)
         seed_u = self._u[seeds].copy()
         seed_g = self._g[seeds].copy()
         self._sigma = seed_u.std(axis=0, ddof=1) if nc > 1 else np.ones(self.n_dims)
@@ -314,8 +399,11 @@ class SubsetSimulation:
         table = self.levels_table()
         probability = float(np.prod(table["conditional_probability"]))
         deltas = table["cov"].to_numpy()
-        cov = float(np.sqrt(np.sum(deltas ** 2)))
+        cov_au_beck = float(np.sqrt(np.sum(deltas ** 2)))
         cov_upper = float(np.sum(deltas))
+        cov = float(np.sqrt(lineage_variance(
+            self._indicators, self._parents, list(table["conditional_probability"]),
+            self.settings.n_chains, self.settings.lineage_lag)))
         low, high = lognormal_interval(probability, cov, self.settings.confidence_level)
         if probability == 0.0:
             # the last level saw no failure: only a bound, from its N points conditionally
@@ -325,11 +413,12 @@ class SubsetSimulation:
             low, high = 0.0, upper
         s = self.settings
         method = (f"subset simulation (Au & Beck 2001; aCS sampler), N = {s.n_per_level} per "
-                  f"level, p0 = {s.level_probability:g}, {len(table)} levels, lognormal interval")
+                  f"level, p0 = {s.level_probability:g}, {len(table)} levels, lognormal interval "
+                  f"with the lineage c.o.v. (lag {s.lineage_lag})")
         return FailureProbability(probability, low, high, cov, int(self.n_evaluations), method,
                                   s.confidence_level,
-                                  {"levels": table, "cov_upper_bound": cov_upper,
-                                   "seed": self.seed})
+                                  {"levels": table, "cov_au_beck": cov_au_beck,
+                                   "cov_upper_bound": cov_upper, "seed": self.seed})
 
     # --- persistence ------------------------------------------------------------------------
     def save(self, path: str | os.PathLike[str]) -> Path:
@@ -343,9 +432,12 @@ class SubsetSimulation:
             "accepted": self._accepted, "levels": self._levels,
             "rngs": [_generator_state(r) for r in self._rngs],
             "has_pending": self._pending is not None,
+            "n_indicators": len(self._indicators), "n_parents": len(self._parents),
         }
         arrays = {"u": self._u, "g": self._g, "sigma": self._sigma,
                   "pending": self._pending if self._pending is not None else np.empty((0, 0))}
+        arrays.update({f"indicator_{j}": ind for j, ind in enumerate(self._indicators)})
+        arrays.update({f"parent_{j}": par for j, par in enumerate(self._parents) if j > 0})
         tmp = path.with_name(path.name + ".tmp")
         with open(tmp, "wb") as fh:
             np.savez(fh, meta=np.array(json.dumps(meta)), **arrays)
@@ -364,6 +456,9 @@ class SubsetSimulation:
             self._g[:] = data["g"]
             self._sigma = data["sigma"].copy()
             self._pending = data["pending"].copy() if meta["has_pending"] else None
+            self._indicators = [data[f"indicator_{j}"].copy() for j in range(meta["n_indicators"])]
+            self._parents = [None] + [data[f"parent_{j}"].copy()
+                                      for j in range(1, meta["n_parents"])]
         self.level, self.n_evaluations, self.done = meta["level"], meta["n_evaluations"], meta["done"]
         self._step, self._threshold, self._scale = meta["step"], meta["threshold"], meta["scale"]
         self._adaptations, self._accepted = meta["adaptations"], list(meta["accepted"])
