@@ -99,7 +99,7 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
     n_ws = vehicle.ws_dofs.shape[0]
     ws_x = np.zeros(n_ws)
     rail_kin = np.zeros((n_ws, 2, 4))
-    work = _work(state.q.shape[0], n_ws, N_COLS)
+    work = _work(state.q.shape[0], n_ws, N_COLS, max(vehicle.zones.shape[0], 1))
     q, v, a, a_prev = state.q, state.v, state.a, state.a_prev
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
     _evaluate(0.0, state, vehicle, work, packed, mesh, track, speed, 0.0, ws_x, rail_kin)

@@ -1,0 +1,214 @@
+"""Two-point wheel-rail contact on real profiles (``train.contact: {profile: profiles,
+contact_points: 2}``): tread and flange with forces of their own, Hertz from the curvatures, and
+the quasi-static flange climb against Nadal's limit.
+
+References (independent of the code):
+* Hertz, elliptical contact (Johnson, Contact Mechanics, 1985, section 4.2): the surface
+  displacement at the centre of the pressure p0 sqrt(1 - x^2/a^2 - y^2/b^2) is
+  (1/(pi E*)) int int p / rho dA (eq. 3.22 for each body, 1/E* = sum (1 - nu^2)/E); with
+  rho < R(theta) = 1/sqrt(cos^2/a^2 + sin^2/b^2) the radial integral is p0 pi R(theta)/4, so the
+  approach is delta = (p0 / 4 E*) int_0^2pi R(theta) dtheta, evaluated here by quadrature (a
+  second method for the closed form with K(e)); circular limit delta = a^2/R (eq. 4.23).
+* Nadal, M. J., "Theorie de la stabilite des locomotives, part 2: mouvement de lacet", Annales
+  des Mines 10 (1908) 232-255: a flange touching the rail at the contact angle gamma with its
+  tangential force saturated at mu N and acting up the flange starts climbing at
+  Q/P = (tan gamma - mu) / (1 + mu tan gamma) (Marquis & Greif, "Application of Nadal limit in
+  the prediction of wheel climb derailment", ASME/IEEE Joint Rail Conference 2011, JRC2011-56064:
+  accurate for a wheel at a large angle of attack with no longitudinal creep force; with a
+  longitudinal creep force sharing the saturation the climb L/V is higher). S1002's flange
+  flank is straight at 70 degrees (EN 13715 section E).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ttbpipe.vehicle.contact import (COL_A, COL_DELTA, COL_DZ, COL_G, build_geometry,
+                                     hertz_constant, hertz_ellipse_mn, wheel_contact,
+                                     wheel_contact_points)
+from ttbpipe.vehicle.kernels import contact_forces
+from ttbpipe.vehicle.parameters import ContactParameters
+from ttbpipe.vehicle.profile_contact import profile_table
+
+E_STEEL, NU = 2.059e11, 0.30
+
+
+@pytest.fixture(scope="module")
+def s1002():
+    """S1002 on 60E1 at 1:40, gauge 1435 mm, flange back 1360 mm, two-point contact."""
+    return build_geometry(ContactParameters(profile="profiles"))
+
+
+@pytest.mark.parametrize("ratio", [1.0, 0.3, 3.0, 10.0, 100.0])
+def test_hertz_constant_against_the_surface_displacement_integral(ratio):
+    """G N^(2/3) (closed form with K(e)) equals the approach from integrating the Hertz pressure
+    (module docstring) over theta by the midpoint rule (4000 points, spectrally accurate for a
+    smooth periodic integrand): tolerance 1e-9. Equal curvatures: delta = a^2 / R, 1e-12."""
+    curv_a, load = 1.1, 7.0e4
+    curv_b = ratio * curv_a
+    g = hertz_constant(curv_a, curv_b, E_STEEL, NU)
+    m, n = hertz_ellipse_mn(curv_a, curv_b)
+    c = (3 * load * (1 - NU ** 2) / (2 * E_STEEL * (curv_a + curv_b))) ** (1 / 3)
+    a, b = m * c, n * c
+    e_star = E_STEEL / (2 * (1 - NU ** 2))
+    p0 = 3 * load / (2 * np.pi * a * b)
+    theta = (np.arange(4000) + 0.5) * 2 * np.pi / 4000
+    radius = 1.0 / np.sqrt(np.cos(theta) ** 2 / a ** 2 + np.sin(theta) ** 2 / b ** 2)
+    delta = p0 / (4 * e_star) * np.sum(radius) * 2 * np.pi / 4000
+    assert g * load ** (2 / 3) == pytest.approx(delta, rel=1e-9)
+    if ratio == 1.0:
+        r_eff = 1.0 / (curv_a + curv_b)
+        assert delta == pytest.approx(a * a / r_eff, rel=1e-12)
+
+
+def test_zone_tables_split_the_wheel_at_the_tread_flange_jump(s1002):
+    """The cut lies between the tread contact and the flange-root contact of the rigid pair's
+    jump (at about 5.2 mm: -17.8 and -28.7 mm on the wheel; the Manchester benchmark's jump
+    from the tread to the flange root, docs/contact_geometry.md section 4); the larger of the
+    zones' gap changes is the one-point table's (the smallest gap over the whole wheel is the
+    smaller of the zones' smallest gaps: a second method for the same number; 5e-8 m, as the
+    one-point table keeps the smallest sampled gap where the zones refine it by a parabola
+    through three samples 0.02 mm apart, measured at most 1.7e-8 m); the
+    flange zone carries the flange angle (70 degrees, EN 13715) where it is the contact."""
+    assert -28.7e-3 < s1002.flange_cut < -17.8e-3
+    zones = s1002.zones
+    assert zones.shape[0] == 2
+    one, _ = profile_table(ContactParameters(profile="profiles"))
+    np.testing.assert_allclose(zones[:, :, COL_DZ].max(axis=0), one[:, 2], rtol=0, atol=5e-8)
+    flange_is_contact = zones[0, :, COL_DZ] >= zones[1, :, COL_DZ]
+    assert np.degrees(zones[0, flange_is_contact, COL_DELTA].max()) == pytest.approx(70.0, abs=0.05)
+    # both zones within 0.1 mm of contact (a two-point contact under the static Hertz
+    # approach of about 0.1 mm) only around the jump
+    y = zones[0, :, 0]
+    both = np.abs(zones[0, :, COL_DZ] - zones[1, :, COL_DZ]) < 1e-4
+    assert np.all((y[both] > 4.0e-3) & (y[both] < 6.0e-3)) and both.sum() >= 5
+    # Hertz from the curvatures at the centred tread contact: the same order as Zhai's
+    # empirical worn-tread G (4.25e-8 m/N^(2/3) at r = 0.43 m; physics.md section 4)
+    centre = zones.shape[1] // 2
+    assert 0.7 < zones[1, centre, COL_G] / 4.25e-8 < 1.1
+    # lateral distance of the contact from the wheelset centre: the centred tread contact of
+    # the benchmark table (753.2 mm) and the flange contact some 40 mm further in
+    assert zones[1, centre, COL_A] == pytest.approx(0.7532, abs=2e-4)
+    assert zones[0, -1, COL_A] < 0.712
+
+
+def test_one_zone_in_contact_gives_the_one_point_normal_force():
+    """With Zhai's worn-tread G in both models and the flange zone open (y_rel = 2 mm), the
+    two-point kernel's normal force equals the one-point kernel's (same gap, angle and law: two
+    code paths for one number) to 3e-4: the zone tables refine the smallest gap by a parabola
+    (at most 1.7e-8 m against an approach of 1e-4 m, so 1.5 x 1.7e-4 in the force; the one
+    point keeps the sampled minimum); in the two-point band (5.0 mm) both points carry
+    load and the sum of the vertical forces exceeds that of the one point (two Hertz springs:
+    the second point's gap is within the approach)."""
+    p1 = ContactParameters(profile="profiles", contact_points=1)
+    p2 = ContactParameters(profile="profiles", contact_points=2, hertz_law="worn")
+    g1, g2 = build_geometry(p1), build_geometry(p2)
+    pen = g1.hertz_g * 7.0e4 ** (2 / 3)
+    kin = {"y": 2.0e-3, "z": float(np.interp(2.0e-3, g1.table[:, 0], g1.table[:, 2])) - pen}
+    one = wheel_contact(1.0, g1, 83.3, kin, {})
+    two, normals = wheel_contact_points(1.0, g2, 83.3, kin, {}, points=True)
+    assert one[4] == pytest.approx(7.0e4 * np.cos(g1.table[g1.table.shape[0] // 2 + 20, 3]) ** 1.5,
+                                   rel=1e-3)
+    assert two[4] == pytest.approx(one[4], rel=3e-4)
+    assert normals[0] == 0.0 and normals[1] > 0.0
+    y = 5.0e-3
+    kin = {"y": y, "z": float(np.interp(y, g1.table[:, 0], g1.table[:, 2])) - pen}
+    one = wheel_contact(1.0, g1, 83.3, kin, {})
+    two, normals = wheel_contact_points(1.0, g2, 83.3, kin, {}, points=True)
+    assert np.all(normals > 0.05 * normals.sum())
+    assert two[2] > one[2]
+
+
+def _climb_path(geom, yaw, spin, load=7.0e4, y_mm=np.arange(4.0, 9.6, 0.05)):
+    """Quasi-static path of a wheelset pushed towards the left rail (module docstring of the
+    test below): for each prescribed lateral displacement y, Newton on the vertical force, roll
+    moment and spin condition; returns rows (y, H, Q/P left, tread N, flange N, tangential
+    creep force over mu N at the flange, contact angle at the flange)."""
+    ws = np.array([[0, 1, 2, 3, 4]])
+    rail = np.zeros((1, 2, 4))
+    speed = 20.0
+
+    def residual(y, x):
+        q = np.array([y, x[0], x[1], 0.0, yaw])
+        v = np.array([0.0, 0.0, 0.0, x[2], 0.0])
+        f, wheel = contact_forces(q, v, ws, geom, speed, rail)
+        third = wheel[0, 0, 0] if spin == "wheel" else f[3]
+        return np.array([(f[1] - 2 * load) / load, f[2] / load, third / load]), f, wheel, q, v
+
+    # start: both wheels on their rails with the static approach (the right wheel reads the
+    # table at -y)
+    y0 = y_mm[0] * 1e-3
+    dz_left, dz_right = np.interp([y0, -y0], geom.table[:, 0], geom.table[:, COL_DZ])
+    x = np.array([0.5 * (dz_left + dz_right) - geom.hertz_g * load ** (2 / 3),
+                  (dz_left - dz_right) / (2 * geom.contact_half_distance), 0.0])
+    rows = []
+    for y in y_mm * 1e-3:
+        for _ in range(100):
+            r, f, wheel, q, v = residual(y, x)
+            jac = np.empty((3, 3))
+            for k, h in enumerate((1e-8, 1e-8, 1e-5)):
+                dx = np.zeros(3)
+                dx[k] = h
+                jac[:, k] = (residual(y, x + dx)[0] - residual(y, x - dx)[0]) / (2 * h)
+            step = np.linalg.solve(jac, -r)
+            # steps of at most 0.02 mm / 0.02 mrad and a creepage change of 1e-3 (r dw / V):
+            # a saturated creep force is flat in the spin rate beyond
+            step *= min(1.0, 2e-5 / max(abs(step[0]), abs(step[1]), 1e-30),
+                        1e-3 * speed / geom.wheel_radius / max(abs(step[2]), 1e-30))
+            x = x + step
+            if max(abs(step[0]), abs(step[1])) < 1e-13 and abs(step[2]) < 1e-10:
+                break
+        r, f, wheel, q, v = residual(y, x)
+        assert np.max(np.abs(r)) < 1e-8, (y, r)
+        kin = {"y": q[0], "z": q[1], "roll": q[2], "yaw": q[4], "vpitch": v[3]}
+        out, normals = wheel_contact_points(1.0, geom, speed, kin, {}, points=True)
+        delta = float(np.interp(y, geom.zones[0, :, 0], geom.zones[0, :, COL_DELTA]))
+        # creep force in the contact plane, across the rolling direction (force_y, force_z of
+        # the left wheel: -N sin d + F cos d, N cos d + F sin d)
+        lateral = out[1] * np.cos(delta) + out[2] * np.sin(delta)
+        saturation = np.hypot(out[0], lateral) / (geom.friction * normals.sum())
+        rows.append((y, -f[0], -wheel[0, 0, 1] / wheel[0, 0, 2], normals[1], normals[0],
+                     saturation, delta))
+    return np.array(rows)
+
+
+def nadal(gamma, mu):
+    return (np.tan(gamma) - mu) / (1 + mu * np.tan(gamma))
+
+
+def test_quasi_static_flange_climb_at_nadals_limit(s1002):
+    """A wheelset (70 kN per wheel through its axle boxes) with a yaw angle of attack of
+    10 mrad, pushed towards the left rail by a lateral force H at its centre that grows slowly:
+    the quasi-static path, followed by prescribing its lateral displacement (the path can be
+    followed past the largest force, which a force ramp cannot), has a largest H; a ramped force
+    beyond it finds no equilibrium short of the flange top, so the wheel climbs there. Nadal's
+    conditions are set up: the positive angle of attack makes the flange slide down the rail
+    (its lateral creepage -yaw cos(delta)) and the flanging wheel turns freely (no longitudinal
+    creep force: the spin rate is solved for F_x = 0 on that wheel, as for Nadal's single
+    wheel). At the climb the tread has lifted, the flange's creep force is saturated at mu N
+    (asserted), the contact sits on S1002's 70-degree flank, and the wheel's Q/P equals
+    Nadal's (tan 70 - 0.3) / (1 + 0.3 tan 70) = 1.342 within 2 % (measured +0.07 %).
+
+    A solid wheelset (one spin rate, the creep moments about the axle balanced) carries a
+    longitudinal creep force at the flange, which shares the saturation: it climbs at a Q/P
+    not below Nadal's (Marquis & Greif 2011; measured +0.3 %: in this model the flange's spin
+    creepage, sin(70 deg)/r0 = 2.2 rad/m, dominates the creep force's direction).
+    """
+    mu = s1002.friction
+    limit = nadal(np.radians(70.0), mu)
+    path = _climb_path(s1002, 0.010, "wheel")
+    k = int(np.argmax(path[:, 1]))
+    assert 0 < k < path.shape[0] - 1            # H rises to a maximum and falls beyond it
+    y, h, qp, tread_n, flange_n, saturation, delta = path[k]
+    assert tread_n == 0.0 and flange_n > 0.0
+    assert saturation == pytest.approx(1.0, abs=1e-6)
+    assert np.degrees(delta) == pytest.approx(70.0, abs=0.3)
+    assert qp == pytest.approx(limit, rel=0.02)
+    # below the climb the wheel's Q/P stays under the limit; the tread unloads on the way
+    assert np.all(path[:k, 2] <= qp + 1e-9)
+    assert path[0, 3] > 0.0
+    solid = _climb_path(s1002, 0.010, "axle")
+    qp_solid = solid[int(np.argmax(solid[:, 1])), 2]
+    assert qp_solid >= qp - 1e-6
+    assert qp_solid == pytest.approx(limit, rel=0.02)
