@@ -147,12 +147,13 @@ N_COLS = 11
 
 #: Two-point (zone) tables: the one-point columns, then the Hertz flexibility G of the row
 #: (m/N^(2/3)), the contact point's lateral distance from the wheelset centre a (m, zero roll)
-#: and its lateral position on the rail profile from the crown line e (m, towards the field side).
+#: and from the rail's crown point e (m, track frame, towards the field side).
 COL_G, COL_A, COL_E = 11, 12, 13
 N_ZCOLS = 14
 #: Per-wheel results of :func:`_wheel_contact_points`: the seven of :func:`_wheel_contact`, then
 #: the generalised moments of the wheel's contact forces about the wheelset centre (roll, spin,
-#: yaw; N m) and the moment of its vertical forces about the rail's axis (N m, about x).
+#: yaw; N m) and the moment of its vertical forces about the rail's shear-centre line (N m,
+#: about x).
 N_POINT_OUT = 11
 #: Conformal contact: a lateral relative curvature B below this fraction of the rolling-direction
 #: curvature A (wheel hollow nearly as tight as the rail head, e.g. S1002's flange root on the
@@ -181,6 +182,8 @@ class ContactGeometry:
     description: str
     zones: np.ndarray | None = None   # (n_zones, n, N_ZCOLS): two-point contact (flange first)
     flange_cut: float | None = None   # wheel profile coordinate of the tread/flange cut (m)
+    rail_cant: float = 0.0            # sin of the rail inclination (two-point: the shear centre
+    #                                   lies rail_head_height sin(beta) field-side of the crown)
 
     def zone_array(self) -> np.ndarray:
         """The zone tables for the kernels: (0, 2, N_ZCOLS) when there are none (one point)."""
@@ -196,11 +199,13 @@ class ContactGeometry:
         """Scalar constants packed for the kernels (order fixed by :data:`SCALAR_NAMES`)."""
         return np.array([self.hertz_g, self.shear_modulus, self.youngs_modulus, self.poisson,
                          self.friction, self.wheel_radius, self.contact_half_distance,
-                         self.flange_clearance, self.flange_stiffness, self.rail_head_height])
+                         self.flange_clearance, self.flange_stiffness, self.rail_head_height,
+                         self.rail_cant])
 
 
 SCALAR_NAMES = ("hertz_g", "shear_modulus", "youngs_modulus", "poisson", "friction", "wheel_radius",
-                "contact_half_distance", "flange_clearance", "flange_stiffness", "rail_head_height")
+                "contact_half_distance", "flange_clearance", "flange_stiffness", "rail_head_height",
+                "rail_cant")
 
 
 def hertz_constant(curv_a: float, curv_b: float, youngs_modulus: float, poisson: float) -> float:
@@ -395,8 +400,11 @@ def zone_geometry(p: ContactParameters, one: ContactGeometry | None = None) -> C
     law = "Hertz from the curvatures" if curvature_law else f"Zhai's {p.hertz_law} law"
     where = ("no tread-flange jump: one zone" if cut is None
              else f"tread and flange cut at {1e3 * cut:.2f} mm on the wheel")
+    from .contact_geometry import parse_inclination
+
     return dataclasses.replace(one, zones=np.ascontiguousarray(zones), flange_cut=cut,
                                hertz_g=g_min,
+                               rail_cant=float(np.sin(np.arctan(parse_inclination(p.rail_inclination)))),
                                description=f"{one.description}; two-point contact ({where}; {law})")
 
 
@@ -565,16 +573,26 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     computes them for its one point, but at the point's own lateral distance a from the
     wheelset centre (table column :data:`COL_A`) and with the row's own Hertz flexibility G:
 
-    dZ_k = z_rail - (z_w + s a_k roll_w) + dz_k(y_rel),  N_k = (dZ_k cos(delta_k) / G_k)^1.5,
+    dZ_k = z_rail + s l_k theta_rail - (z_w + s a_k roll_w) + dz_k(y_rel),
+    N_k = (dZ_k cos(delta_k) / G_k)^1.5,
     xi_x = -(r_k - r0)/r0 - s a_k yaw'/V - r_k pitch'/V,
-    xi_y = [(y_w' + r_k roll_w' - V yaw_w - y_rail') cos d_k + s (z_w' + s a_k roll_w' - z_rail') sin d_k]/V,
-    xi_sp = yaw_w' cos d_k / V - s sin d_k / r0.
+    xi_y = [(y_w' + r_k roll_w' - V yaw_w - y_rail') cos d_k
+            + s (z_w' + s a_k roll_w' - z_rail' - s l_k theta_rail') sin d_k]/V,
+    xi_sp = yaw_w' cos d_k / V - s sin d_k / r0,
+
+    with l_k = e_k - h sin(beta) the point's lateral distance (towards the field side) from the
+    rail's shear-centre line: e_k from the crown point (:data:`COL_E`), the shear centre h
+    (``rail_head_height``, scalar 9) below the crown on the rail's axis inclined by beta
+    (``rail_cant`` = sin beta, scalar 10). ``rail`` = (z, y, dz/dt, dy/dt[, theta, dtheta/dt]):
+    the rail head as for :func:`_wheel_contact` and, when given, the rail's roll (torsion) at
+    the contact: the rail's vertical motion at the point follows it (seed paper eq. 31: the
+    vertical load at l_h twists the rail; its transpose in the kinematics).
 
     Writes ``out`` (:data:`N_POINT_OUT`): the wheel's summed [F_x, F_y, F_z, M_spin, N], y_rel,
     the largest penetration, then the generalised moments about the wheelset centre of the
     points' forces at (0, s a_k, -r_k): roll sum(s a_k F_z + r_k F_y), spin sum(-r_k F_x), yaw
-    sum(-s a_k F_x + M_k cos d_k), and sum(s e_k F_z), the moment of the vertical forces about
-    the rail's axis (e_k the point's lateral position on the rail profile, :data:`COL_E`).
+    sum(-s a_k F_x + M_k cos d_k), and sum(s l_k F_z), the moment about x of the vertical
+    forces on the wheel about the rail's shear-centre line (the rail carries its negative).
 
     Semi-implicit lateral creep (``creep_relax`` > 0, as :func:`_wheel_contact`): the points'
     lateral creep dampers f22_k / V act in parallel between the wheelset and the rail head, so
@@ -585,8 +603,9 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     (n_zones, 10).
     """
     g_shear, e_mod, nu, mu, r0 = scal[1], scal[2], scal[3], scal[4], scal[5]
+    axis = scal[9] * scal[10]
     ws_y, ws_z, ws_roll, ws_yaw, ws_vy, ws_vz, ws_vroll, ws_vpitch, ws_vyaw = wheelset
-    rail_z, rail_y, rail_vz, rail_vy = rail
+    rail_z, rail_y, rail_vz, rail_vy, rail_roll, rail_vroll = rail
     y_rel = ws_y - rail_y
     n_z = zones.shape[0]
     n = zones.shape[1]
@@ -611,7 +630,9 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     for k in range(n_z):
         zk = zones[k]
         a = zk[ih, COL_A] * (1.0 - wh) + zk[ih + 1, COL_A] * wh
-        pen = rail_z - (ws_z + side * a * ws_roll) + zk[i, COL_DZ] * (1.0 - w) + zk[i + 1, COL_DZ] * w
+        lever = zk[ih, COL_E] * (1.0 - wh) + zk[ih + 1, COL_E] * wh - axis
+        pen = (rail_z + side * lever * rail_roll - (ws_z + side * a * ws_roll)
+               + zk[i, COL_DZ] * (1.0 - w) + zk[i + 1, COL_DZ] * w)
         if pen > pen_max:
             pen_max = pen
         pts[k, 0] = 0.0
@@ -632,7 +653,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         pts[k, 1] = zk[i, COL_R] * (1.0 - w) + zk[i + 1, COL_R] * w
         pts[k, 2] = delta
         pts[k, 3] = a
-        pts[k, 4] = zk[ih, COL_E] * (1.0 - wh) + zk[ih + 1, COL_E] * wh
+        pts[k, 4] = lever
         pts[k, 5] = g_shear * ab * (zk[ih, COL_C11] * (1.0 - wh) + zk[ih + 1, COL_C11] * wh)
         pts[k, 6] = f22
         pts[k, 7] = g_shear * ab ** 1.5 * (zk[ih, COL_C23] * (1.0 - wh) + zk[ih + 1, COL_C23] * wh)
@@ -654,11 +675,11 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         if normal <= 0.0:
             creep_prev[k] = np.nan
             continue
-        radius, delta, a, e_rail = pts[k, 1], pts[k, 2], pts[k, 3], pts[k, 4]
+        radius, delta, a, lever = pts[k, 1], pts[k, 2], pts[k, 3], pts[k, 4]
         f11, f22, f23, f33, cos_d = pts[k, 5], pts[k, 6], pts[k, 7], pts[k, 8], pts[k, 9]
         sin_d = np.sin(delta)
         v_lat = ws_vy + radius * ws_vroll - speed * ws_yaw - rail_vy
-        v_ver = ws_vz + side * a * ws_vroll - rail_vz
+        v_ver = ws_vz + side * a * ws_vroll - rail_vz - side * lever * rail_vroll
         xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
         if creep_relax > 0.0 and creep_prev[k] == creep_prev[k]:
             xi_y = (xi_y + g * creep_prev[k]) / (1.0 + g)
@@ -682,7 +703,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         m_roll += side * a * force_z + radius * force_y
         m_spin -= radius * fx
         m_yaw += -side * a * fx + mz * cos_d
-        m_rail += side * e_rail * force_z
+        m_rail += side * lever * force_z
     out[0] = fx_sum
     out[1] = fy_sum
     out[2] = fz_sum
@@ -707,7 +728,7 @@ def wheel_contact_points(side: float, geom: ContactGeometry, speed: float, ws: d
     pts = np.zeros((zones.shape[0], 10))
     wheelset = tuple(float(ws.get(k, 0.0)) for k in ("y", "z", "roll", "yaw", "vy", "vz", "vroll",
                                                      "vpitch", "vyaw"))
-    rails = tuple(float(rail.get(k, 0.0)) for k in ("z", "y", "vz", "vy"))
+    rails = tuple(float(rail.get(k, 0.0)) for k in ("z", "y", "vz", "vy", "roll", "vroll"))
     _wheel_contact_points(side, zones, geom.scalars(), speed, wheelset, rails, pts, out,
                           np.full(zones.shape[0], np.nan), 0.0)
     return (out, pts[:, 0].copy()) if points else out

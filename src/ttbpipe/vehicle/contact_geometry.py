@@ -446,6 +446,9 @@ class ContactPair:
                 "rail_transverse_radius": 1.0 / rcurv,
                 "wheel_longitudinal_radius": radius / np.cos(delta_w),
                 "wheel_angle_in_wheelset": delta_w,
+                # lateral distance (track frame, towards the field side) of the contact from
+                # the inclined rail's crown point, the origin of its profile
+                "rail_offset": u_c - rail.offset,
             }
 
     def solve(self, y: np.ndarray) -> pd.DataFrame:

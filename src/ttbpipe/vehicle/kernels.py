@@ -2,10 +2,12 @@
 
 Layout conventions: see :mod:`ttbpipe.vehicle.model` (DOFs) and :mod:`ttbpipe.vehicle.contact`
 (geometry table, contact kinematics). Rail kinematics per wheel are packed as
-``rail_kin[ws, side, 0:4] = (z, dz/dt, y, dy/dt)`` of the rail head at the contact (structure plus
-irregularity), side 0 = left rail (+y), 1 = right rail. Per-wheel results are
-``wheel[ws, side, 0:7] = (F_x, F_y, F_z, M_spin, N, y_rel, penetration)`` (force of the rail on
-the wheel, track axes).
+``rail_kin[ws, side, 0:6] = (z, dz/dt, y, dy/dt, theta, dtheta/dt)`` of the rail head at the
+contact (structure plus irregularity; theta the rail's roll, used by the two-point contact; an
+array of 4 columns means no roll), side 0 = left rail (+y), 1 = right rail. Per-wheel results are
+``wheel[ws, side, 0:8] = (F_x, F_y, F_z, M_spin, N, y_rel, penetration, M_rail)`` (force of the
+rail on the wheel, track axes; M_rail the moment of the wheel's vertical forces about the rail's
+shear-centre line, two-point contact only, 0 otherwise).
 """
 
 from __future__ import annotations
@@ -15,7 +17,9 @@ from numba import njit
 
 from .contact import N_COLS, N_POINT_OUT, _wheel_contact, _wheel_contact_points
 
-N_WHEEL_OUT = 7
+N_WHEEL_OUT = 8
+#: Columns of ``rail_kin`` per wheel (ttbpipe.simulation.loop.track_kinematics).
+RAIL_KIN_COLS = 6
 
 
 @njit(cache=True)
@@ -65,6 +69,7 @@ def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratc
     a0 = scal[6]
     n_ws = ws_dofs.shape[0]
     two_point = zones.shape[0] > 0
+    with_roll = rail_kin.shape[2] > 4
     for w in range(n_ws):
         iy = ws_dofs[w, 0]
         iz = ws_dofs[w, 1]
@@ -74,11 +79,14 @@ def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratc
         for k in range(2):
             side = 1.0 if k == 0 else -1.0
             if two_point:
+                roll = rail_kin[w, k, 4] if with_roll else 0.0
+                vroll = rail_kin[w, k, 5] if with_roll else 0.0
                 _wheel_contact_points(
                     side, zones, scal, speed,
                     (q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip],
                      v[iw] + frame_yaw_rate[w]),
-                    (rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3]),
+                    (rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3],
+                     roll, vroll),
                     pts, tmp, creep_state[w, k], creep_relax)
                 force[iy] += tmp[1]
                 force[iz] += tmp[2]
@@ -87,6 +95,7 @@ def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratc
                 force[iw] += tmp[9]
                 for c in range(7):
                     wheel[w, k, c] = tmp[c]
+                wheel[w, k, 7] = tmp[10]
                 continue
             creep_state[w, k, 0] = _wheel_contact(
                 side, table, scal, speed,

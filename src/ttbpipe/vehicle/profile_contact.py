@@ -113,7 +113,7 @@ OPEN_ZONE_GAP_M = 1.0e-3
 #: Columns of :func:`zone_tables` per zone.
 ZONE_TABLE_COLUMNS = ("y_rel_m", "rolling_radius_m", "gap_change_m", "contact_angle_rad",
                       "wheel_transverse_radius_m", "rail_transverse_radius_m",
-                      "contact_lateral_m", "rail_lateral_m", "wheel_longitudinal_radius_m")
+                      "contact_lateral_m", "rail_offset_m", "wheel_longitudinal_radius_m")
 
 
 def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TABLE_STEP_M,
@@ -125,8 +125,9 @@ def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TAB
     dz = g(0) - g_zone(y) (the same reference g(0), the smallest gap of the centred wheel, for
     every zone: a zone whose dz falls short of the other's by more than the elastic approach is
     open), contact angle, transverse radii of wheel and rail, the contact point's lateral
-    distance from the wheelset centre (track frame, zero roll) and its lateral position on the
-    upright rail profile from the crown line (towards the field side), and the wheel's
+    distance from the wheelset centre (track frame, zero roll) and from the inclined rail's
+    crown point (the origin of the rail profile; track frame, towards the field side), and the
+    wheel's
     principal radius in the rolling direction r / cos(delta_w) (delta_w the profile's angle in
     the wheelset frame: the normal section of a surface of revolution). Returns (array
     (n_zones, n, 9), the cut or None, the pair); zones ordered flange first."""
@@ -143,7 +144,7 @@ def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TAB
     for k, z in enumerate(zones):
         out[k] = np.column_stack([y, z["rolling_radius"] + shift, centre - z["gap"], z["angle"],
                                   z["wheel_transverse_radius"], z["rail_transverse_radius"],
-                                  z["track_position"] - y, z["rail_position"],
+                                  z["track_position"] - y, z["rail_offset"],
                                   (z["rolling_radius"] + shift) / np.cos(z["wheel_angle_in_wheelset"])])
         # rows where no point of the zone lies above the rail head (the flange inside the
         # rail when the wheel moves far towards the track centre): the zone is open there;
