@@ -266,3 +266,42 @@ def test_vertical_loads_twist_the_rail_about_its_shear_centre():
     dfz_dtheta = (fz(eps_t, base["z"])[0] - fz(-eps_t, base["z"])[0]) / (2 * eps_t)
     dq_dz = (fz(0.0, base["z"] + eps_z)[1] - fz(0.0, base["z"] - eps_z)[1]) / (2 * eps_z)
     assert dfz_dtheta == pytest.approx(dq_dz, rel=1e-4)
+
+
+def test_steady_curving_on_two_point_contact():
+    """One car on S1002 / 60E1 with two-point contact on a 1000 m curve at 160 km/h with 60 mm
+    cant (run from the steady state on the arc, 200 m): the rails' lateral forces on the eight
+    wheels add up to m (V^2/R cos theta - g sin theta) (the closed form of tests/test_curving.py)
+    within 1 % (measured < 0.01 %, 92.4 kN), the leading wheelset sits outwards in the
+    two-point band of the pair (4.2-5.8 mm: tread and flange root both within the static
+    approach, test above; measured 5.4 mm) and its outer wheel's tread and flange root both
+    carry load (evaluated at the run's last state)."""
+    from ttbpipe.constants import STANDARD_GRAVITY
+    from ttbpipe.simulation.coupled import integrate, prepare
+    from ttbpipe.vehicle.curving import CANT_BASE_M
+
+    radius, speed_kmh, cant_mm = 1000.0, 160.0, 60.0
+    curve = {"start_x_m": -1000.0, "transition_m": 0.0, "length_m": 5000.0,
+             "radius_m": radius, "cant_mm": cant_mm, "direction": "left"}
+    setup = prepare({"train": {"composition": ["trailer"], "contact": {"profile": "profiles"}},
+                     "simulation": {"track": "rigid", "speed_kmh": speed_kmh,
+                                    "rigid_length_m": 200.0, "time_step_s": 1e-4,
+                                    "layout": {"curves": [curve]}},
+                     "irregularity": {"source": "none"}})
+    run = integrate(setup)
+    wheel = run.wheel
+    last = slice(int(0.8 * wheel.shape[0]), None)
+    lateral = wheel[last, :, :, 1].sum(axis=(1, 2)).mean()
+    mass = setup.model.mass[0::5].sum()
+    theta = np.arcsin(cant_mm / 1000.0 / CANT_BASE_M)
+    v = speed_kmh / 3.6
+    expected = mass * (v * v / radius * np.cos(theta) - STANDARD_GRAVITY * np.sin(theta))
+    assert lateral == pytest.approx(expected, rel=0.01)
+    y_lead = -wheel[-1, 0, 1, 3]            # the outer (right) wheel's y_rel, towards its rail
+    assert 4.2e-3 < y_lead < 5.8e-3
+    m = setup.model
+    dofs = m.wheelset_dofs[0]
+    q = run.q[-1]
+    kin = {"y": q[dofs[0]], "z": q[dofs[1]], "roll": q[dofs[2]], "yaw": q[dofs[4]]}
+    _, normals = wheel_contact_points(-1.0, setup.geom, v, kin, {}, points=True)
+    assert np.all(normals > 0.02 * normals.sum()), normals

@@ -136,7 +136,8 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
         record_monitors(monitors, disp, vel, acc)
         record_step_channels(train, monitors.current, work.wheel, q, a)
         if step % out_every == 0:
-            finite, big = record_vehicle_output(train, out_row, step * dt, q, a)
+            finite, big = record_vehicle_output(train, out_row, step * dt, q, a,
+                                                vehicle.ws_dofs[:, 3])
             if not finite:
                 return 1, n
             for i in range(disp.shape[0]):
