@@ -110,6 +110,11 @@ def flange_split(pair: ContactPair, y: np.ndarray) -> float | None:
 #: (about 0.1 mm at the static wheel load): rows where it has no point above the rail hold it.
 OPEN_ZONE_GAP_M = 1.0e-3
 
+#: Virtual penetration (m) for the position of a zone's load: about half the elastic approach at
+#: the static wheel load (0.1 mm), the share of the rigid overlap that the Hertz patch covers
+#: (Piotrowski & Kik, Vehicle System Dynamics 46 (2008) 27-48: 0.55).
+CONTACT_SPREAD_M = 5.0e-5
+
 #: Columns of :func:`zone_tables` per zone.
 ZONE_TABLE_COLUMNS = ("y_rel_m", "rolling_radius_m", "gap_change_m", "contact_angle_rad",
                       "wheel_transverse_radius_m", "rail_transverse_radius_m",
@@ -124,10 +129,12 @@ def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TAB
     one-point table, so that the centred contact rolls on the nominal radius), gap change
     dz = g(0) - g_zone(y) (the same reference g(0), the smallest gap of the centred wheel, for
     every zone: a zone whose dz falls short of the other's by more than the elastic approach is
-    open), contact angle, transverse radii of wheel and rail, the contact point's lateral
-    distance from the wheelset centre (track frame, zero roll) and from the inclined rail's
-    crown point (the origin of the rail profile; track frame, towards the field side), and the
-    wheel's
+    open), contact angle, transverse radii of wheel and rail, the lateral distance of the zone's
+    load from the wheelset centre (track frame, zero roll) and from the inclined rail's crown
+    point (the origin of the rail profile; track frame, towards the field side) -- both the
+    centroid of the zone's overlap at the virtual penetration :data:`CONTACT_SPREAD_M`
+    (:meth:`ContactPair.zone_contacts`), so that the load moves continuously over a conformal
+    tread -- and the wheel's
     principal radius in the rolling direction r / cos(delta_w) (delta_w the profile's angle in
     the wheelset frame: the normal section of a surface of revolution). Returns (array
     (n_zones, n, 9), the cut or None, the pair); zones ordered flange first."""
@@ -139,12 +146,13 @@ def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TAB
     one = pair._contact(0, np.zeros(1), np.zeros(1), np.zeros(1))
     shift = float(p.wheel_radius) - float(one["rolling_radius"][0])
     split = flange_split(pair, y)
-    zones = pair.zone_contacts(0, y, zero, [] if split is None else [split])
+    zones = pair.zone_contacts(0, y, zero, [] if split is None else [split],
+                               spread=CONTACT_SPREAD_M)
     out = np.empty((len(zones), y.size, len(ZONE_TABLE_COLUMNS)))
     for k, z in enumerate(zones):
         out[k] = np.column_stack([y, z["rolling_radius"] + shift, centre - z["gap"], z["angle"],
                                   z["wheel_transverse_radius"], z["rail_transverse_radius"],
-                                  z["track_position"] - y, z["rail_offset"],
+                                  z["track_position_centroid"] - y, z["rail_offset_centroid"],
                                   (z["rolling_radius"] + shift) / np.cos(z["wheel_angle_in_wheelset"])])
         # rows where no point of the zone lies above the rail head (the flange inside the
         # rail when the wheel moves far towards the track centre): the zone is open there;
