@@ -218,9 +218,15 @@ def hertz_constant(curv_a: float, curv_b: float, youngs_modulus: float, poisson:
     G = 3 K(e) (1 - nu^2) / (pi E m c_1). Equal curvatures give delta = a^2 / R (eq. 4.23).
     """
     m, n = hertz_ellipse_mn(curv_a, curv_b)
+    return _hertz_constant_mn(m, n, curv_a + curv_b, youngs_modulus, poisson)
+
+
+def _hertz_constant_mn(m: float, n: float, curv_sum: float, youngs_modulus: float,
+                       poisson: float) -> float:
+    """:func:`hertz_constant` from the ellipse coefficients m, n and A + B."""
     major, minor = max(m, n), min(m, n)
     e2 = 1.0 - (minor / major) ** 2
-    c1 = (3.0 * (1.0 - poisson ** 2) / (2.0 * youngs_modulus * (curv_a + curv_b))) ** (1.0 / 3.0)
+    c1 = (3.0 * (1.0 - poisson ** 2) / (2.0 * youngs_modulus * curv_sum)) ** (1.0 / 3.0)
     return float(3.0 * ellipk(e2) * (1.0 - poisson ** 2) / (np.pi * youngs_modulus * major * c1))
 
 
@@ -330,8 +336,9 @@ def _geometry(table: np.ndarray, p: ContactParameters, tread: str, desc: str) ->
 
 
 def profiles_geometry(p: ContactParameters) -> ContactGeometry:
-    """Geometry from a real wheel and rail profile pair (:mod:`ttbpipe.vehicle.profile_contact`):
-    the flange is part of the table, so the flange spring is off; the worn-tread Hertz law."""
+    """One-point geometry from a real wheel and rail profile pair
+    (:mod:`ttbpipe.vehicle.profile_contact`): the flange is part of the table, so the flange
+    spring is off; the worn-tread Hertz law (two-point contact: :func:`zone_geometry`)."""
     import dataclasses
 
     from .profile_contact import profile_table
@@ -391,8 +398,8 @@ def zone_geometry(p: ContactParameters, one: ContactGeometry | None = None) -> C
             m, n_ = hertz_ellipse_mn(curv_a, curv_b)
             zones[k, i, COL_M], zones[k, i, COL_N], zones[k, i, COL_ABSUM] = m, n_, curv_a + curv_b
             zones[k, i, COL_C11:COL_C33 + 1] = kalker_coefficients(m / n_)
-            zones[k, i, COL_G] = (hertz_constant(curv_a, curv_b, p.youngs_modulus, p.poisson)
-                                  if curvature_law else zhai)
+            zones[k, i, COL_G] = (_hertz_constant_mn(m, n_, curv_a + curv_b, p.youngs_modulus,
+                                                     p.poisson) if curvature_law else zhai)
     if held:
         log.info("two-point contact: %d table rows near contact are conformal (B < %.2g A) and "
                  "held at that ratio", held, CONFORMAL_CURVATURE_RATIO)
@@ -408,9 +415,24 @@ def zone_geometry(p: ContactParameters, one: ContactGeometry | None = None) -> C
                                description=f"{one.description}; two-point contact ({where}; {law})")
 
 
+#: Profile-pair geometries built in this process, by their parameters (a study builds the same
+#: pair for every sample; the geometry's arrays are not modified after building).
+_PROFILE_GEOMETRIES: dict[str, ContactGeometry] = {}
+
+
+def _file_stamp(name: str) -> str:
+    """Size and modification time of a profile given as a file (a changed file is rebuilt)."""
+    path = Path(str(name))
+    if path.is_file():
+        st = path.stat()
+        return f"|{st.st_size}:{st.st_mtime_ns}"
+    return ""
+
+
 def build_geometry(p: ContactParameters) -> ContactGeometry:
     """Contact geometry for the configured profile (conical, table or profiles; profiles with
-    ``contact_points`` 2 adds the tread and flange zone tables)."""
+    ``contact_points`` 2 adds the tread and flange zone tables). A profile pair is built once
+    per process and parameter set."""
     if p.hertz_law == "hertz" and p.profile != "profiles":
         raise ValueError("train.contact.hertz_law: hertz needs profile: profiles")
     if p.profile == "conical":
@@ -419,11 +441,12 @@ def build_geometry(p: ContactParameters) -> ContactGeometry:
         points = int(p.contact_points)
         if points not in (1, 2):
             raise ValueError(f"train.contact.contact_points: {p.contact_points!r}; expected 1 or 2")
-        if points == 2:
-            return zone_geometry(p)
-        if p.hertz_law == "hertz":
+        if points == 1 and p.hertz_law == "hertz":
             raise ValueError("train.contact.hertz_law: hertz needs contact_points: 2")
-        return profiles_geometry(p)
+        key = repr(p) + "".join(_file_stamp(name) for name in (p.wheel_profile, p.rail_profile))
+        if key not in _PROFILE_GEOMETRIES:
+            _PROFILE_GEOMETRIES[key] = zone_geometry(p) if points == 2 else profiles_geometry(p)
+        return _PROFILE_GEOMETRIES[key]
     return table_geometry(p)
 
 

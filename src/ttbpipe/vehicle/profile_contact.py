@@ -19,10 +19,12 @@ to the looked-up values, as it does for the cone):
 
 Where the flange touches, the table's contact angle reaches the flange angle (about 70 degrees
 for S1002 on 60E1) and its normal force carries the lateral load, so the flange spring of the
-cone model is switched off. One contact point per wheel (the smallest gap): at a tread-to-flange
-jump the table interpolates between the two points over one grid step; two simultaneous points
-with forces of their own are not modelled yet. The table is built before the run and is
-interpolated in the loop (the same kernel as every table), so the step costs the same.
+cone model is switched off. With ``contact_points: 1`` one contact point per wheel (the smallest
+gap): at a tread-to-flange jump the table interpolates between the two points over one grid
+step. With ``contact_points: 2`` (the default) :func:`zone_tables` cuts the wheel into a tread
+and a flange zone, each with a contact point and forces of its own
+(:func:`ttbpipe.vehicle.contact.zone_geometry`, docs/contact_geometry.md section 7). The tables
+are built before the run and interpolated in the loop.
 """
 
 from __future__ import annotations
