@@ -199,7 +199,7 @@ def test_quasi_static_flange_climb_at_nadals_limit(s1002):
     creep force: the spin rate is solved for F_x = 0 on that wheel, as for Nadal's single
     wheel). At the climb the tread has lifted, the flange's creep force is saturated at mu N
     (asserted), the contact sits on S1002's 70-degree flank, and the wheel's Q/P equals
-    Nadal's (tan 70 - 0.3) / (1 + 0.3 tan 70) = 1.342 within 2 % (measured +0.07 %).
+    Nadal's (tan 70 - 0.3) / (1 + 0.3 tan 70) = 1.342 within 2 % (measured +0.08 %).
 
     A solid wheelset (one spin rate, the creep moments about the axle balanced) carries a
     longitudinal creep force at the flange, which shares the saturation: it climbs at a Q/P

@@ -7,8 +7,9 @@ gravity loads plus the coupler preload of the static state, and f_contact the wh
 forces of every wheel (:func:`ttbpipe.vehicle.kernels.train_contact`). A loop hands over the rail
 kinematics at every wheel, ``rail_kin[ws, side] = (z, dz/dt, y, dy/dt)`` of the rail head
 (structure plus irregularity), and gets back the accelerations and the wheel table
-``wheel[ws, side] = (F_x, F_y, F_z, M_spin, N, y_rel, penetration)`` (forces of the rail on the
-wheel, track axes), whose negatives it applies to the rails.
+``wheel[ws, side] = (F_x, F_y, F_z, M_spin, N, y_rel, penetration, M_rail)`` (forces of the rail
+on the wheel, track axes; M_rail: two-point contact's vertical forces' moment about the rail's
+shear centre, ttbpipe.vehicle.kernels), whose negatives it applies to the rails.
 
 :class:`VehicleArrays` groups what the kernel needs; :func:`vehicle_arrays` builds it from a
 :class:`~ttbpipe.vehicle.model.TrainModel`.
