@@ -5,7 +5,7 @@ M a = f_const + f_contact(q, v, rail) - K q - C v, with M diagonal (35 DOF per c
 :mod:`ttbpipe.vehicle.model`), K and C the suspension and coupler matrices (CSR), f_const the
 gravity loads plus the coupler preload of the static state, and f_contact the wheel-rail contact
 forces of every wheel (:func:`ttbpipe.vehicle.kernels.train_contact`). A loop hands over the rail
-kinematics at every wheel, ``rail_kin[ws, side] = (z, dz/dt, y, dy/dt)`` of the rail head
+kinematics at every wheel, ``rail_kin[ws, side] = (z, dz/dt, y, dy/dt, theta, dtheta/dt)`` of the rail head
 (structure plus irregularity), and gets back the accelerations and the wheel table
 ``wheel[ws, side] = (F_x, F_y, F_z, M_spin, N, y_rel, penetration, M_rail)`` (forces of the rail
 on the wheel, track axes; M_rail: two-point contact's vertical forces' moment about the rail's
