@@ -1,7 +1,12 @@
 """Wall seconds per simulated second of the reference case (config/reference_case.yaml), one core.
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_reference_case.py [--case path.yaml] [--dt 1.25e-4]
-        [--lateral-creep semi_implicit|explicit]
+        [--lateral-creep semi_implicit|explicit] [--contact profiles] [--contact-points 1|2]
+
+``--contact profiles`` runs the case on S1002 / 60E1 (``train.contact: {profile: profiles}``,
+docs/contact_geometry.md; give ``--dt 1e-4``: the pair's Hertz contact lowers the coupled step
+limit); ``--contact-points`` selects one- or two-point contact on it (a tree without the
+option rejects the key).
 
 Prints the set-up time (structure, stability check, static equilibrium), the time loop's wall and
 CPU time, wall seconds per simulated second (target: at most 1 s on one core), the wall
@@ -40,8 +45,16 @@ def main() -> None:
     parser.add_argument("--dt", type=float, default=None, help="override simulation.time_step_s")
     parser.add_argument("--lateral-creep", default=None, choices=["semi_implicit", "explicit"],
                         help="override simulation.lateral_creep")
+    parser.add_argument("--contact", default=None, choices=["profiles"],
+                        help="train.contact.profile (default: the case's)")
+    parser.add_argument("--contact-points", type=int, default=None, choices=[1, 2],
+                        help="train.contact.contact_points (with --contact profiles)")
     args = parser.parse_args()
     case = yaml.safe_load(Path(args.case).read_text())
+    if args.contact:
+        case.setdefault("train", {})["contact"] = {"profile": args.contact}
+        if args.contact_points:
+            case["train"]["contact"]["contact_points"] = args.contact_points
     sim = case.setdefault("simulation", {})
     if args.dt:
         sim["time_step_s"] = args.dt

@@ -28,10 +28,11 @@ from numba import njit
 from ..irregularity.track_input import irregularity_at
 from ..structure.kernels import structure_accelerations
 from ..structure.monitors import no_monitors, record_monitors
-from ..structure.rail_mesh import add_rail_head_load, rail_head_kinematics
+from ..structure.rail_mesh import add_rail_contact_load, add_rail_head_load, rail_point_kinematics
 from ..timestepping.zhai import zhai_predict
 from ..vehicle.dynamics import _work, vehicle_accelerations
 from ..vehicle.contact import N_COLS
+from ..vehicle.kernels import RAIL_KIN_COLS
 from ..decimation import flush
 from .recorder import (TrainRecorder, record_step_channels, record_vehicle_output,
                        record_wheel_output, record_wheel_step, train_recorder)
@@ -52,19 +53,25 @@ CoupledState = namedtuple("CoupledState", ["q", "v", "a", "a_prev", "disp", "vel
 
 @njit(cache=True)
 def track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin):
-    """rail_kin[ws, side] = (z, dz/dt, y, dy/dt) of the rail head under every wheel: the
-    structure's (rail head moved by the roll) plus the irregularity of that rail (its time
-    derivative is V times its slope)."""
+    """rail_kin[ws, side] = (z, dz/dt, y, dy/dt, theta, dtheta/dt) of the rail head under every
+    wheel: the structure's (rail head moved by the roll theta) plus the irregularity of that
+    rail (its time derivative is V times its slope); the roll only where ``rail_kin`` has its
+    6 columns (ttbpipe.vehicle.kernels.RAIL_KIN_COLS)."""
+    with_roll = rail_kin.shape[2] > 4
+    h = mesh.head_height
     for w in range(ws_x.shape[0]):
         x = ws_x[w]
         for k in range(2):
-            z, vz, y, vy = rail_head_kinematics(mesh, k, x, disp, vel)
+            z, vz, y, vy, r, vr = rail_point_kinematics(mesh, k, x, disp, vel)
             zi, dzi = irregularity_at(track, k, x)
             yi, dyi = irregularity_at(track, 2 + k, x)
             rail_kin[w, k, 0] = z + zi
             rail_kin[w, k, 1] = vz + speed * dzi
-            rail_kin[w, k, 2] = y + yi
-            rail_kin[w, k, 3] = vy + speed * dyi
+            rail_kin[w, k, 2] = (y - h * r) + yi
+            rail_kin[w, k, 3] = (vy - h * vr) + speed * dyi
+            if with_roll:
+                rail_kin[w, k, 4] = r
+                rail_kin[w, k, 5] = vr
 
 
 @njit(cache=True)
@@ -80,10 +87,18 @@ def _evaluate(t, state, vehicle, work, packed, mesh, track, speed, creep_relax, 
     for i in range(nodal_force.shape[0]):
         nodal_force[i] = 0.0
     wheel = work.wheel
+    two_point = vehicle.zones.shape[0] > 0
     for w in range(ws_x.shape[0]):
         for k in range(2):
-            # the rail carries the opposite of the force of the rail on the wheel
-            add_rail_head_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1], nodal_force)
+            # the rail carries the opposite of the force of the rail on the wheel (with
+            # two-point contact also the opposite of its vertical forces' moment about the
+            # rail's shear centre: they act off the rail's axis)
+            if two_point:
+                add_rail_contact_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
+                                      -wheel[w, k, 7], nodal_force)
+            else:
+                add_rail_head_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
+                                   nodal_force)
     structure_accelerations(packed, state.disp, state.vel, nodal_force, state.acc)
 
 
@@ -99,8 +114,8 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
     """
     n_ws = vehicle.ws_dofs.shape[0]
     ws_x = np.zeros(n_ws)
-    rail_kin = np.zeros((n_ws, 2, 4))
-    work = _work(state.q.shape[0], n_ws, N_COLS)
+    rail_kin = np.zeros((n_ws, 2, RAIL_KIN_COLS))
+    work = _work(state.q.shape[0], n_ws, N_COLS, max(vehicle.zones.shape[0], 1))
     q, v, a, a_prev = state.q, state.v, state.a, state.a_prev
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
     _evaluate(0.0, state, vehicle, work, packed, mesh, track, speed, 0.0, ws_x, rail_kin)

@@ -44,13 +44,14 @@ import numpy as np
 import pandas as pd
 
 from ..irregularity.track_input import Irregularity, build_irregularity
-from ..structure.rail_mesh import (RailMesh, add_rail_head_load, no_rails, rail_inverse_masses,
-                                   rail_mesh)
+from ..structure.rail_mesh import (RailMesh, add_rail_contact_load, add_rail_head_load, no_rails,
+                                   rail_inverse_masses, rail_mesh)
 from ..structure.static import StructureStatic
 from ..timestepping.limits import (contact_time_step_limit, coupled_time_step_limit,
                                    resolve_time_step)
 from ..vehicle.contact import ContactGeometry, build_geometry
 from ..vehicle.dynamics import VehicleArrays, vehicle_arrays
+from ..vehicle.kernels import RAIL_KIN_COLS
 from ..vehicle.model import TrainModel, build_train_model
 from ..vehicle.parameters import TrainParameters, train_from_config
 from ..vehicle.curving import curve_arrays
@@ -105,7 +106,7 @@ class CoupledSetup:
 
 
 def _rail_kin_at(mesh, disp, ws_x, irr: Irregularity) -> np.ndarray:
-    rail_kin = np.zeros((ws_x.size, 2, 4))
+    rail_kin = np.zeros((ws_x.size, 2, RAIL_KIN_COLS))
     track_kinematics(mesh, irr, disp, np.zeros_like(disp), ws_x, 0.0, rail_kin)
     return rail_kin
 
@@ -130,7 +131,12 @@ def static_equilibrium(model, geom, speed, mesh, structure_static, irr, ws_x,
         force = np.zeros(n_s)
         for w in range(ws_x.size):
             for k in range(2):
-                add_rail_head_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1], force)
+                if geom.zones is not None:       # as the loop (ttbpipe.simulation.loop)
+                    add_rail_contact_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
+                                          -wheel[w, k, 7], force)
+                else:
+                    add_rail_head_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
+                                       force)
         disp = structure_static.solve(force)
         loads = wheel[:, :, 2]
         if prev is not None and np.max(np.abs(loads - prev)) < tol_load:
@@ -222,6 +228,12 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
         monitors = compile_monitors(structure, case.get("monitors") or default_monitors(structure))
     else:
         raise ValueError(f"simulation.track: {track_kind!r}; expected structure | rigid")
+    if geom.zones is not None:
+        # two-point contact: the vertical loads' lever about the rail's shear centre uses the
+        # structure's head height, as the lateral force's (ttbpipe.structure.rail_mesh)
+        import dataclasses
+
+        geom = dataclasses.replace(geom, rail_head_height=float(mesh.head_height))
     if sim.get("duration_s") is not None:
         x_end = x_lead0 + speed * float(sim["duration_s"])
         if structure is not None and x_end > structure.rail_x_range[1]:

@@ -10,7 +10,8 @@ uniform mesh and where their DOFs start) and three kernels,
   by the head height h under the roll (y_head = y - h roll), where a wheel touches;
 * :func:`add_rail_point_load` / :func:`add_rail_head_load`: the consistent nodal loads of a point
   force (Fz, Fy) and moment Mx, the transposes of the two above (virtual work); a lateral force at
-  the head adds the moment -h Fy about the shear centre.
+  the head adds the moment -h Fy about the shear centre (:func:`add_rail_contact_load`: and a
+  given moment, the vertical force's off the rail's axis).
 
 Callers know nothing of the rail's DOF layout (5 DOF per node: z, dz/dx, y, dy/dx, roll; node 0
 of rail r at ``dof0[r]``): that stays here and in the structure's assembly. The tuple is small on
@@ -130,6 +131,13 @@ def add_rail_point_load(mesh, rail, x, fz, fy, mx, nodal_force):
     nodal_force[b + 3] += n4 * fy
     nodal_force[a + 4] += (1.0 - xi) * mx
     nodal_force[b + 4] += xi * mx
+
+
+@njit(cache=True, inline="always")
+def add_rail_contact_load(mesh, rail, x, fz, fy, mx, nodal_force):
+    """:func:`add_rail_head_load` plus a moment ``mx`` about the shear centre (e.g. of a vertical
+    force acting off the rail's axis, F_z l_h: seed paper eq. 31)."""
+    add_rail_point_load(mesh, rail, x, fz, fy, -mesh.head_height * fy + mx, nodal_force)
 
 
 @njit(cache=True, inline="always")

@@ -24,6 +24,11 @@ Formulas and sources (physics.md section 4 unless stated):
   and chaos in a model of a rolling railway wheelset", Phil. Trans. R. Soc. A 338: delta_f =
   9.1 mm, k_f = 1.823e7 N/m [M]).
 
+* Hertz flexibility from the curvatures (two-point profile contact): delta = G N^(2/3) with
+  G = 3 K(e) (1 - nu^2) / (pi E m c_1), the major semi-axis m c_1 N^(1/3) (Johnson eqs.
+  4.36-4.40: delta = 3 N K(e) / (2 pi a E*), 1/E* = 2 (1 - nu^2)/E for wheel and rail of one
+  steel); circular limit delta = a^2 / R (Johnson eq. 4.23).
+
 Geometry tables: a contact-geometry table gives, for the LEFT wheel as a function of the
 relative lateral displacement y_rel = y_wheelset - y_rail (m, + left), the rolling radius r, the
 change dz of the rigid wheel-rail gap (how much the wheel's contact point drops below its nominal
@@ -32,6 +37,13 @@ wheel points up and towards the track centre), the ellipse coefficients m, n, th
 A + B and the four Kalker coefficients. The right wheel uses the same table at -y_rel (left/right
 mirror symmetry of the profile pair). A conical tread gives r = r0 + lambda y, dz = lambda y,
 delta = atan(lambda).
+
+Two-point contact (``profile: profiles``, ``contact_points: 2``): the wheel's profile is cut into
+a tread and a flange zone (:func:`ttbpipe.vehicle.profile_contact.zone_tables`); each zone has
+its own table (``ContactGeometry.zones``, columns :data:`COL_G` .. :data:`COL_E` added: the
+Hertz flexibility of the row, the contact's lateral distance from the wheelset centre and its
+lateral position on the rail profile), its own penetration, normal force, creepages and creep
+forces (:func:`_wheel_contact_points`).
 """
 
 from __future__ import annotations
@@ -133,6 +145,25 @@ COL_Y, COL_R, COL_DZ, COL_DELTA, COL_M, COL_N, COL_ABSUM, COL_C11, COL_C22, COL_
 N_COLS = 11
 
 
+#: Two-point (zone) tables: the one-point columns, then the Hertz flexibility G of the row
+#: (m/N^(2/3)), the contact point's lateral distance from the wheelset centre a (m, zero roll)
+#: and from the rail's crown point e (m, track frame, towards the field side).
+COL_G, COL_A, COL_E = 11, 12, 13
+N_ZCOLS = 14
+#: Per-wheel results of :func:`_wheel_contact_points`: the seven of :func:`_wheel_contact`, then
+#: the generalised moments of the wheel's contact forces about the wheelset centre (roll, spin,
+#: yaw; N m) and the moment of its vertical forces about the rail's shear-centre line (N m,
+#: about x).
+N_POINT_OUT = 11
+#: Conformal contact: a lateral relative curvature B below this fraction of the rolling-direction
+#: curvature A (wheel hollow nearly as tight as the rail head, e.g. S1002's flange root on the
+#: gauge corner of 60E1) is held at it, where Hertz's half-space assumption fails anyway.
+CONFORMAL_CURVATURE_RATIO = 0.05
+#: A zone whose gap is within this of the wheel's contact (m; about half the static elastic
+#: approach) counts for the scalar Hertz flexibility of the step limits.
+REACH_GAP_M = 5.0e-5
+
+
 @dataclass
 class ContactGeometry:
     """Left-wheel contact-geometry table on a uniform y_rel grid plus the scalar contact constants."""
@@ -149,6 +180,16 @@ class ContactGeometry:
     flange_stiffness: float
     rail_head_height: float
     description: str
+    zones: np.ndarray | None = None   # (n_zones, n, N_ZCOLS): two-point contact (flange first)
+    flange_cut: float | None = None   # wheel profile coordinate of the tread/flange cut (m)
+    rail_cant: float = 0.0            # sin of the rail inclination (two-point: the shear centre
+    #                                   lies rail_head_height sin(beta) field-side of the crown)
+
+    def zone_array(self) -> np.ndarray:
+        """The zone tables for the kernels: (0, 2, N_ZCOLS) when there are none (one point)."""
+        if self.zones is None:
+            return np.zeros((0, 2, N_ZCOLS))
+        return self.zones
 
     @property
     def y_grid(self) -> np.ndarray:
@@ -158,11 +199,35 @@ class ContactGeometry:
         """Scalar constants packed for the kernels (order fixed by :data:`SCALAR_NAMES`)."""
         return np.array([self.hertz_g, self.shear_modulus, self.youngs_modulus, self.poisson,
                          self.friction, self.wheel_radius, self.contact_half_distance,
-                         self.flange_clearance, self.flange_stiffness, self.rail_head_height])
+                         self.flange_clearance, self.flange_stiffness, self.rail_head_height,
+                         self.rail_cant])
 
 
 SCALAR_NAMES = ("hertz_g", "shear_modulus", "youngs_modulus", "poisson", "friction", "wheel_radius",
-                "contact_half_distance", "flange_clearance", "flange_stiffness", "rail_head_height")
+                "contact_half_distance", "flange_clearance", "flange_stiffness", "rail_head_height",
+                "rail_cant")
+
+
+def hertz_constant(curv_a: float, curv_b: float, youngs_modulus: float, poisson: float) -> float:
+    """Hertz flexibility G (m/N^(2/3)): normal approach delta = G N^(2/3) of two bodies of one
+    material with relative curvatures A (rolling direction) and B (lateral).
+
+    Johnson, Contact Mechanics (1985), eqs. 4.36-4.40: delta = 3 N K(e) / (2 pi a E*) with a the
+    major semi-axis, e the eccentricity and 1/E* = 2 (1 - nu^2)/E; with a = m c_1 N^(1/3),
+    c_1 = [3 (1 - nu^2) / (2 E (A + B))]^(1/3) (:func:`hertz_ellipse_mn`):
+    G = 3 K(e) (1 - nu^2) / (pi E m c_1). Equal curvatures give delta = a^2 / R (eq. 4.23).
+    """
+    m, n = hertz_ellipse_mn(curv_a, curv_b)
+    return _hertz_constant_mn(m, n, curv_a + curv_b, youngs_modulus, poisson)
+
+
+def _hertz_constant_mn(m: float, n: float, curv_sum: float, youngs_modulus: float,
+                       poisson: float) -> float:
+    """:func:`hertz_constant` from the ellipse coefficients m, n and A + B."""
+    major, minor = max(m, n), min(m, n)
+    e2 = 1.0 - (minor / major) ** 2
+    c1 = (3.0 * (1.0 - poisson ** 2) / (2.0 * youngs_modulus * curv_sum)) ** (1.0 / 3.0)
+    return float(3.0 * ellipk(e2) * (1.0 - poisson ** 2) / (np.pi * youngs_modulus * major * c1))
 
 
 def _fill_ellipse_and_kalker(table: np.ndarray, wheel_transverse_radius: np.ndarray,
@@ -271,8 +336,9 @@ def _geometry(table: np.ndarray, p: ContactParameters, tread: str, desc: str) ->
 
 
 def profiles_geometry(p: ContactParameters) -> ContactGeometry:
-    """Geometry from a real wheel and rail profile pair (:mod:`ttbpipe.vehicle.profile_contact`):
-    the flange is part of the table, so the flange spring is off; the worn-tread Hertz law."""
+    """One-point geometry from a real wheel and rail profile pair
+    (:mod:`ttbpipe.vehicle.profile_contact`): the flange is part of the table, so the flange
+    spring is off; the worn-tread Hertz law (two-point contact: :func:`zone_geometry`)."""
     import dataclasses
 
     from .profile_contact import profile_table
@@ -288,12 +354,99 @@ def profiles_geometry(p: ContactParameters) -> ContactGeometry:
     return _geometry(table, dataclasses.replace(p, flange_stiffness=0.0), tread, desc)
 
 
+def zone_geometry(p: ContactParameters, one: ContactGeometry | None = None) -> ContactGeometry:
+    """Two-point contact geometry of a profile pair: the one-point geometry of
+    :func:`profiles_geometry` (its table serves the step limits, the linearised vehicle and the
+    conicity) with the tread and flange zone tables (:func:`ttbpipe.vehicle.profile_contact.zone_tables`).
+
+    Per zone row: Hertz ellipse and Kalker coefficients from the relative curvatures
+    A = 1/(2 R_x), R_x = r / cos(delta_w) the wheel's rolling-direction principal radius (the
+    rail is straight), B = (1/R_wheel + 1/R_rail)/2 (conformal rows held at
+    :data:`CONFORMAL_CURVATURE_RATIO` A); the Hertz flexibility G from those curvatures
+    (:func:`hertz_constant`; ``hertz_law`` auto or hertz) or Zhai's law of the tread (worn, cone).
+    The scalar ``hertz_g`` (static start and step limits) becomes the smallest G of a row whose
+    zone lies within :data:`REACH_GAP_M` of the contact (the stiffest contact the wheel meets
+    with a substantial share of its load).
+    """
+    import dataclasses
+
+    from .profile_contact import zone_tables
+
+    if p.hertz_law not in ("auto", "hertz", "worn", "cone"):
+        raise ValueError(f"train.contact.hertz_law: {p.hertz_law!r}; expected auto | hertz | worn | cone")
+    one = profiles_geometry(p) if one is None else one
+    raw, cut, _ = zone_tables(p)
+    n_z, n, _ = raw.shape
+    zones = np.zeros((n_z, n, N_ZCOLS))
+    curvature_law = p.hertz_law in ("auto", "hertz")
+    zhai = hertz_g(p.wheel_radius, "cone" if p.hertz_law == "cone" else "worn")
+    held = 0
+    reach = raw[:, :, 2] >= raw[:, :, 2].max(axis=0) - REACH_GAP_M
+    for k in range(n_z):
+        zones[k, :, COL_Y] = raw[k, :, 0]
+        zones[k, :, COL_R] = raw[k, :, 1]
+        zones[k, :, COL_DZ] = raw[k, :, 2]
+        zones[k, :, COL_DELTA] = raw[k, :, 3]
+        zones[k, :, COL_A] = raw[k, :, 6]
+        zones[k, :, COL_E] = raw[k, :, 7]
+        for i in range(n):
+            curv_a = 0.5 / raw[k, i, 8]
+            curv_b = 0.5 * (1.0 / raw[k, i, 5] + 1.0 / raw[k, i, 4])
+            if curv_b < CONFORMAL_CURVATURE_RATIO * curv_a:
+                curv_b = CONFORMAL_CURVATURE_RATIO * curv_a
+                held += int(reach[k, i])
+            m, n_ = hertz_ellipse_mn(curv_a, curv_b)
+            zones[k, i, COL_M], zones[k, i, COL_N], zones[k, i, COL_ABSUM] = m, n_, curv_a + curv_b
+            zones[k, i, COL_C11:COL_C33 + 1] = kalker_coefficients(m / n_)
+            zones[k, i, COL_G] = (_hertz_constant_mn(m, n_, curv_a + curv_b, p.youngs_modulus,
+                                                     p.poisson) if curvature_law else zhai)
+    if held:
+        log.info("two-point contact: %d table rows near contact are conformal (B < %.2g A) and "
+                 "held at that ratio", held, CONFORMAL_CURVATURE_RATIO)
+    g_min = float(zones[:, :, COL_G][reach].min())
+    law = "Hertz from the curvatures" if curvature_law else f"Zhai's {p.hertz_law} law"
+    where = ("no tread-flange jump: one zone" if cut is None
+             else f"tread and flange cut at {1e3 * cut:.2f} mm on the wheel")
+    from .contact_geometry import parse_inclination
+
+    return dataclasses.replace(one, zones=np.ascontiguousarray(zones), flange_cut=cut,
+                               hertz_g=g_min,
+                               rail_cant=float(np.sin(np.arctan(parse_inclination(p.rail_inclination)))),
+                               description=f"{one.description}; two-point contact ({where}; {law})")
+
+
+#: Profile-pair geometries built in this process, by their parameters (a study builds the same
+#: pair for every sample; the geometry's arrays are not modified after building).
+_PROFILE_GEOMETRIES: dict[str, ContactGeometry] = {}
+
+
+def _file_stamp(name: str) -> str:
+    """Size and modification time of a profile given as a file (a changed file is rebuilt)."""
+    path = Path(str(name))
+    if path.is_file():
+        st = path.stat()
+        return f"|{st.st_size}:{st.st_mtime_ns}"
+    return ""
+
+
 def build_geometry(p: ContactParameters) -> ContactGeometry:
-    """Contact geometry for the configured profile (conical, table or profiles)."""
+    """Contact geometry for the configured profile (conical, table or profiles; profiles with
+    ``contact_points`` 2 adds the tread and flange zone tables). A profile pair is built once
+    per process and parameter set."""
+    if p.hertz_law == "hertz" and p.profile != "profiles":
+        raise ValueError("train.contact.hertz_law: hertz needs profile: profiles")
     if p.profile == "conical":
         return conical_geometry(p)
     if p.profile == "profiles":
-        return profiles_geometry(p)
+        points = int(p.contact_points)
+        if points not in (1, 2):
+            raise ValueError(f"train.contact.contact_points: {p.contact_points!r}; expected 1 or 2")
+        if points == 1 and p.hertz_law == "hertz":
+            raise ValueError("train.contact.hertz_law: hertz needs contact_points: 2")
+        key = repr(p) + "".join(_file_stamp(name) for name in (p.wheel_profile, p.rail_profile))
+        if key not in _PROFILE_GEOMETRIES:
+            _PROFILE_GEOMETRIES[key] = zone_geometry(p) if points == 2 else profiles_geometry(p)
+        return _PROFILE_GEOMETRIES[key]
     return table_geometry(p)
 
 
@@ -431,6 +584,177 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     out[5] = y_rel
     out[6] = penetration
     return xi_y_state
+
+
+@njit(cache=True)
+def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, speed: float,
+                          wheelset, rail, pts: np.ndarray, out: np.ndarray,
+                          creep_prev: np.ndarray, creep_relax: float) -> None:
+    """Two-point contact of one wheel (side +1 left, -1 right): every zone of ``zones`` (tread,
+    flange; :class:`ContactGeometry`) is a contact point with its own penetration, Hertz normal
+    force, creepages and Kalker + Shen-Hedrick-Elkins creep forces, as :func:`_wheel_contact`
+    computes them for its one point, but at the point's own lateral distance a from the
+    wheelset centre (table column :data:`COL_A`) and with the row's own Hertz flexibility G:
+
+    dZ_k = z_rail + s l_k theta_rail - (z_w + s a_k roll_w) + dz_k(y_rel),
+    N_k = (dZ_k cos(delta_k) / G_k)^1.5,
+    xi_x = -(r_k - r0)/r0 - s a_k yaw'/V - r_k pitch'/V,
+    xi_y = [(y_w' + r_k roll_w' - V yaw_w - y_rail') cos d_k
+            + s (z_w' + s a_k roll_w' - z_rail' - s l_k theta_rail') sin d_k]/V,
+    xi_sp = yaw_w' cos d_k / V - s sin d_k / r0,
+
+    with l_k = e_k - h sin(beta) the point's lateral distance (towards the field side) from the
+    rail's shear-centre line: e_k from the crown point (:data:`COL_E`), the shear centre h
+    (``rail_head_height``, scalar 9) below the crown on the rail's axis inclined by beta
+    (``rail_cant`` = sin beta, scalar 10). ``rail`` = (z, y, dz/dt, dy/dt[, theta, dtheta/dt]):
+    the rail head as for :func:`_wheel_contact` and, when given, the rail's roll (torsion) at
+    the contact: the rail's vertical motion at the point follows it (seed paper eq. 31: the
+    vertical load at l_h twists the rail; its transpose in the kinematics).
+
+    Writes ``out`` (:data:`N_POINT_OUT`): the wheel's summed [F_x, F_y, F_z, M_spin, N], y_rel,
+    the largest penetration, then the generalised moments about the wheelset centre of the
+    points' forces at (0, s a_k, -r_k): roll sum(s a_k F_z + r_k F_y), spin sum(-r_k F_x), yaw
+    sum(-s a_k F_x + M_k cos d_k), and sum(s l_k F_z), the moment about x of the vertical
+    forces on the wheel about the rail's shear-centre line (the rail carries its negative).
+
+    Semi-implicit lateral creep (``creep_relax`` > 0, as :func:`_wheel_contact`): the points'
+    lateral creep dampers f22_k / V act in parallel between the wheelset and the rail head, so
+    each point's creepage is relaxed with the wheel's total g = creep_relax sum(f22_k):
+    xi_y*_k = (xi_y_k + g xi_y*_k,prev) / (1 + g) (the backward-Euler value for parallel dampers
+    on one velocity; exact in steady state). ``creep_prev[k]`` holds each point's xi_y* (NaN out
+    of contact: a point coming into contact starts from the explicit law). ``pts`` is scratch
+    (n_zones, 10).
+    """
+    g_shear, e_mod, nu, mu, r0 = scal[1], scal[2], scal[3], scal[4], scal[5]
+    axis = scal[9] * scal[10]
+    ws_y, ws_z, ws_roll, ws_yaw, ws_vy, ws_vz, ws_vroll, ws_vpitch, ws_vyaw = wheelset
+    rail_z, rail_y, rail_vz, rail_vy, rail_roll, rail_vroll = rail
+    y_rel = ws_y - rail_y
+    n_z = zones.shape[0]
+    n = zones.shape[1]
+    y0 = zones[0, 0, 0]
+    s = (side * y_rel - y0) / (zones[0, 1, 0] - y0)
+    if s < 0.0:
+        i, w = 0, s
+    elif s >= n - 1:
+        i, w = n - 2, s - (n - 2)
+    else:
+        i = int(s)
+        w = s - i
+    # r and dz extrapolate linearly beyond the table; the other columns hold their end values
+    if w < 0.0:
+        ih, wh = 0, 0.0
+    elif w > 1.0:
+        ih, wh = n - 2, 1.0
+    else:
+        ih, wh = i, w
+    f22_sum = 0.0
+    pen_max = -np.inf
+    for k in range(n_z):
+        zk = zones[k]
+        a = zk[ih, COL_A] * (1.0 - wh) + zk[ih + 1, COL_A] * wh
+        lever = zk[ih, COL_E] * (1.0 - wh) + zk[ih + 1, COL_E] * wh - axis
+        pen = (rail_z + side * lever * rail_roll - (ws_z + side * a * ws_roll)
+               + zk[i, COL_DZ] * (1.0 - w) + zk[i + 1, COL_DZ] * w)
+        if pen > pen_max:
+            pen_max = pen
+        pts[k, 0] = 0.0
+        if pen <= 0.0:
+            continue
+        delta = zk[ih, COL_DELTA] * (1.0 - wh) + zk[ih + 1, COL_DELTA] * wh
+        g_k = zk[ih, COL_G] * (1.0 - wh) + zk[ih + 1, COL_G] * wh
+        cos_d = np.cos(delta)
+        normal = _hertz_force(pen * cos_d, g_k)
+        if normal <= 0.0:
+            continue
+        absum = zk[ih, COL_ABSUM] * (1.0 - wh) + zk[ih + 1, COL_ABSUM] * wh
+        c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * absum)) ** (1.0 / 3.0)
+        ab = ((zk[ih, COL_M] * (1.0 - wh) + zk[ih + 1, COL_M] * wh)
+              * (zk[ih, COL_N] * (1.0 - wh) + zk[ih + 1, COL_N] * wh) * c * c)
+        f22 = g_shear * ab * (zk[ih, COL_C22] * (1.0 - wh) + zk[ih + 1, COL_C22] * wh)
+        pts[k, 0] = normal
+        pts[k, 1] = zk[i, COL_R] * (1.0 - w) + zk[i + 1, COL_R] * w
+        pts[k, 2] = delta
+        pts[k, 3] = a
+        pts[k, 4] = lever
+        pts[k, 5] = g_shear * ab * (zk[ih, COL_C11] * (1.0 - wh) + zk[ih + 1, COL_C11] * wh)
+        pts[k, 6] = f22
+        pts[k, 7] = g_shear * ab ** 1.5 * (zk[ih, COL_C23] * (1.0 - wh) + zk[ih + 1, COL_C23] * wh)
+        pts[k, 8] = g_shear * ab * ab * (zk[ih, COL_C33] * (1.0 - wh) + zk[ih + 1, COL_C33] * wh)
+        pts[k, 9] = cos_d
+        f22_sum += f22
+    g = f22_sum * creep_relax
+    fx_sum = 0.0
+    fy_sum = 0.0
+    fz_sum = 0.0
+    mz_sum = 0.0
+    n_sum = 0.0
+    m_roll = 0.0
+    m_spin = 0.0
+    m_yaw = 0.0
+    m_rail = 0.0
+    for k in range(n_z):
+        normal = pts[k, 0]
+        if normal <= 0.0:
+            creep_prev[k] = np.nan
+            continue
+        radius, delta, a, lever = pts[k, 1], pts[k, 2], pts[k, 3], pts[k, 4]
+        f11, f22, f23, f33, cos_d = pts[k, 5], pts[k, 6], pts[k, 7], pts[k, 8], pts[k, 9]
+        sin_d = np.sin(delta)
+        v_lat = ws_vy + radius * ws_vroll - speed * ws_yaw - rail_vy
+        v_ver = ws_vz + side * a * ws_vroll - rail_vz - side * lever * rail_vroll
+        xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
+        if creep_relax > 0.0 and creep_prev[k] == creep_prev[k]:
+            xi_y = (xi_y + g * creep_prev[k]) / (1.0 + g)
+        creep_prev[k] = xi_y
+        xi_x = -(radius - r0) / r0 - side * a * ws_vyaw / speed - radius * ws_vpitch / speed
+        xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
+        tx = -f11 * xi_x
+        ty = -f22 * xi_y - f23 * xi_sp
+        tm = f23 * xi_y - f33 * xi_sp
+        kf = _she_factor(tx, ty, mu, normal)
+        fx = kf * tx
+        fy = kf * ty
+        mz = kf * tm
+        force_y = -side * normal * sin_d + fy * cos_d
+        force_z = normal * cos_d + side * fy * sin_d
+        fx_sum += fx
+        fy_sum += force_y
+        fz_sum += force_z
+        mz_sum += mz
+        n_sum += normal
+        m_roll += side * a * force_z + radius * force_y
+        m_spin -= radius * fx
+        m_yaw += -side * a * fx + mz * cos_d
+        m_rail += side * lever * force_z
+    out[0] = fx_sum
+    out[1] = fy_sum
+    out[2] = fz_sum
+    out[3] = mz_sum
+    out[4] = n_sum
+    out[5] = y_rel
+    out[6] = pen_max
+    out[7] = m_roll
+    out[8] = m_spin
+    out[9] = m_yaw
+    out[10] = m_rail
+
+
+def wheel_contact_points(side: float, geom: ContactGeometry, speed: float, ws: dict,
+                         rail: dict, points: bool = False):
+    """Python wrapper of :func:`_wheel_contact_points` for tests (explicit creep law): the
+    wheel's results, and with ``points`` also each zone's normal force (flange first)."""
+    zones = geom.zone_array()
+    if zones.shape[0] == 0:
+        raise ValueError("wheel_contact_points: the geometry has no two-point zone tables")
+    out = np.zeros(N_POINT_OUT)
+    pts = np.zeros((zones.shape[0], 10))
+    wheelset = tuple(float(ws.get(k, 0.0)) for k in ("y", "z", "roll", "yaw", "vy", "vz", "vroll",
+                                                     "vpitch", "vyaw"))
+    rails = tuple(float(rail.get(k, 0.0)) for k in ("z", "y", "vz", "vy", "roll", "vroll"))
+    _wheel_contact_points(side, zones, geom.scalars(), speed, wheelset, rails, pts, out,
+                          np.full(zones.shape[0], np.nan), 0.0)
+    return (out, pts[:, 0].copy()) if points else out
 
 
 def wheel_contact(side: float, geom: ContactGeometry, speed: float, ws: dict, rail: dict) -> np.ndarray:

@@ -317,23 +317,10 @@ class ContactPair:
         gap, u = self._gaps(side, y, roll)
         gap = gap + lift[:, None]
         w = self._wheels[side]
-        n = gap.shape[1]
         rows = np.arange(gap.shape[0])
 
         def refine(idx):
-            """Parabola through the three samples around each minimum: parameter, u, gap."""
-            i = np.clip(idx, 1, n - 2)
-            g0, g1, g2 = gap[rows, i - 1], gap[rows, i], gap[rows, i + 1]
-            ok = np.isfinite(g0) & np.isfinite(g1) & np.isfinite(g2)
-            g0, g2 = np.where(ok, g0, 0.0), np.where(ok, g2, 0.0)
-            den = g0 - 2 * g1 + g2
-            ok &= den > 0
-            t = np.where(ok, 0.5 * (g0 - g2) / np.where(ok, den, 1.0), 0.0)
-            t = np.clip(t, -1.0, 1.0)
-            gmin = g1 - 0.25 * (g0 - g2) * t
-            par = np.interp(i + t, np.arange(n), w.par)
-            u_c = u[rows, i] + t * 0.5 * (u[rows, i + 1] - u[rows, i - 1])
-            return par, u_c, np.where(ok, gmin, g1)
+            return self._refine(side, gap, u, idx)
 
         i1 = np.argmin(gap, axis=1)
         par1, u1, g1 = refine(i1)
@@ -356,6 +343,108 @@ class ContactPair:
         out["gap"] = g1
         return out
 
+    def _refine(self, side: int, gap: np.ndarray, u: np.ndarray, idx: np.ndarray,
+                lo: int = 0, hi: int | None = None):
+        """Parabola through the three samples around each minimum ``idx`` (one per row of
+        ``gap``): spline parameter, track lateral u and gap. Only samples ``lo`` .. ``hi - 1``
+        count: a minimum on the first or last of them is kept as it is (no parabola)."""
+        w = self._wheels[side]
+        n = gap.shape[1]
+        zone = hi is not None
+        rows = np.arange(gap.shape[0])
+        if zone:
+            idx = np.asarray(idx)
+            edge = (idx <= lo) | (idx >= hi - 1)
+        i = np.clip(idx, 1, n - 2)
+        g0, g1, g2 = gap[rows, i - 1], gap[rows, i], gap[rows, i + 1]
+        ok = np.isfinite(g0) & np.isfinite(g1) & np.isfinite(g2)
+        if zone:
+            ok &= ~edge
+            i = np.where(edge, idx, i)
+            g1 = gap[rows, i]
+        g0, g2 = np.where(ok, g0, 0.0), np.where(ok, g2, 0.0)
+        den = g0 - 2 * g1 + g2
+        ok &= den > 0
+        t = np.where(ok, 0.5 * (g0 - g2) / np.where(ok, den, 1.0), 0.0)
+        t = np.clip(t, -1.0, 1.0)
+        gmin = g1 - 0.25 * (g0 - g2) * t
+        par = np.interp(i + t, np.arange(n), w.par)
+        if zone:
+            u_c = u[rows, i] + t * 0.5 * (u[rows, np.minimum(i + 1, n - 1)]
+                                          - u[rows, np.maximum(i - 1, 0)])
+        else:
+            u_c = u[rows, i] + t * 0.5 * (u[rows, i + 1] - u[rows, i - 1])
+        return par, u_c, np.where(ok, gmin, g1)
+
+    def zone_contacts(self, side: int, y: np.ndarray, roll: np.ndarray,
+                      splits: list[float] | tuple[float, ...], spread: float = 0.0) -> list[dict]:
+        """Contact of each zone of wheel ``side``'s profile (0 left, 1 right) on its rail.
+
+        The wheel profile is cut at the lateral profile coordinates ``splits`` (m, towards the
+        field side; e.g. one cut between the tread and the flange) into zones; in each zone the
+        smallest vertical gap to the rail is its contact point (refined by a parabola when it is
+        interior to the zone). The smallest gap over a fixed zone is a continuous function of y
+        and roll, so each zone's normal force is continuous when the contact jumps within it or
+        from one zone to another. Returns one dict per zone, from the flange side to the field
+        side, with ``gap`` (m, at zero wheelset height, the reference of :meth:`_min_gap`) and
+        the quantities of :meth:`_quantities`.
+
+        Where a zone's smallest gap lies on one of its ends (the zone's part of the wheel
+        approaches the rail only towards the neighbouring zone: no contact point of its own),
+        the quantities are those of the zone's best interior local minimum of the gap if it has
+        one, else of that end point (``interior`` False); the gap stays the zone's smallest.
+
+        ``spread`` > 0 (m): ``track_position_centroid`` and ``rail_offset_centroid`` are the
+        centroid of the zone's wheel points whose gap is within ``spread`` of its smallest,
+        weighted by (spread - excess)^1.5 (the Hertz law of a virtual penetration ``spread``:
+        where the contact is conformal, e.g. S1002's tread on 60E1 near the centred position
+        with two rigid contact points 10 mm apart and 0.01 mm in gap, the load's position moves
+        continuously with y instead of jumping from one point to the other).
+        """
+        y = np.atleast_1d(np.asarray(y, float))
+        roll = np.broadcast_to(np.asarray(roll, float), y.shape)
+        sgn = 1.0 if side == 0 else -1.0
+        gap, u = self._gaps(side, y, roll)
+        s = self._wheels[side].s
+        edges = np.concatenate([[0], np.searchsorted(s, np.sort(np.asarray(splits, float))),
+                                [s.size]])
+        local = np.zeros_like(gap, bool)
+        local[:, 1:-1] = (gap[:, 1:-1] < gap[:, :-2]) & (gap[:, 1:-1] <= gap[:, 2:]) \
+            & np.isfinite(gap[:, :-2]) & np.isfinite(gap[:, 2:])
+        out = []
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            if hi - lo < 3:
+                raise ValueError(f"wheel zone between samples {lo} and {hi} is empty: the cuts "
+                                 f"{np.asarray(splits) / MM} mm lie outside the wheel profile or "
+                                 "too close together")
+            idx = lo + np.argmin(gap[:, lo:hi], axis=1)
+            _, _, g = self._refine(side, gap, u, idx, lo, hi)
+            inner = np.zeros_like(local)
+            inner[:, lo + 1:hi - 1] = local[:, lo + 1:hi - 1]
+            cand = np.where(inner, gap, np.inf)
+            i_in = np.argmin(cand, axis=1)
+            rows = np.arange(y.size)
+            has = np.isfinite(cand[rows, i_in])
+            at_end = (idx == lo) | (idx == hi - 1)
+            use = np.where(at_end & has, i_in, idx)
+            par, u_c, _ = self._refine(side, gap, u, use, lo, hi)
+            q = self._quantities(side, sgn, par, u_c)
+            q["gap"] = g
+            q["interior"] = ~at_end | has
+            if spread > 0.0:
+                with np.errstate(invalid="ignore"):
+                    excess = gap[:, lo:hi] - g[:, None]
+                    weight = np.where(np.isfinite(excess),
+                                      np.clip(spread - excess, 0.0, None) ** 1.5, 0.0)
+                total = weight.sum(axis=1)
+                centroid = np.where(total > 0.0, (weight * np.where(np.isfinite(u[:, lo:hi]),
+                                                                   u[:, lo:hi], 0.0)).sum(axis=1)
+                                    / np.where(total > 0.0, total, 1.0), u_c)
+                q["track_position_centroid"] = sgn * centroid
+                q["rail_offset_centroid"] = centroid - self._rails[side].offset
+            out.append(q)
+        return out
+
     def _quantities(self, side, sgn, par, u_c):
         """Contact quantities at wheel spline parameters ``par`` and track lateral ``u_c``."""
         w, rail = self._wheels[side], self._rails[side]
@@ -375,6 +464,9 @@ class ContactPair:
                 "rail_transverse_radius": 1.0 / rcurv,
                 "wheel_longitudinal_radius": radius / np.cos(delta_w),
                 "wheel_angle_in_wheelset": delta_w,
+                # lateral distance (track frame, towards the field side) of the contact from
+                # the inclined rail's crown point, the origin of its profile
+                "rail_offset": u_c - rail.offset,
             }
 
     def solve(self, y: np.ndarray) -> pd.DataFrame:

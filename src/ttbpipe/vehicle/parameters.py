@@ -124,7 +124,9 @@ class ContactParameters:
     youngs_modulus: float = 2.059e11      # [V] CHN60 steel
     poisson: float = 0.30                 # [V]
     friction: float = 0.30                # [M] physics.md section 4
-    hertz_law: str = "auto"               # auto (cone for conical, worn for table) | cone | worn
+    hertz_law: str = "auto"               # auto (cone for conical, worn for table, hertz for
+    #                                       two-point profiles) | cone | worn | hertz (from the
+    #                                       contact's curvatures; profiles with contact_points 2)
     flange_clearance: float = 9.1e-3      # [M] Knudsen, Feldberg & True 1991 wheelset model
     flange_stiffness: float = 1.823e7     # [M] same source: F = k0 (y - delta), k0 1.823e7 N/m
     rail_head_height: float = 0.10        # [A] lever of the lateral force about the rail's axis
@@ -135,6 +137,8 @@ class ContactParameters:
     rail_inclination: str = "1:40"        # 1:20 | 1:40 | none
     gauge_m: float = 1.435                # nominal gauge, measured 14 mm below the rail top
     flange_back_m: float = 1.360          # flange-back spacing of the wheelset
+    contact_points: int = 2               # profiles: 2 = tread and flange with forces of their
+    #                                       own; 1 = one point per wheel (the smallest gap)
 
 
 #: Contact geometries: a cone (closed form), a tabulated file, a wheel and rail profile pair.

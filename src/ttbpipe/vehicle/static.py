@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .kernels import contact_forces
+from .kernels import RAIL_KIN_COLS, contact_forces
 from .model import (BODIES_PER_CAR, CAR_BODY, DOF_PER_BODY, FRONT_BOGIE, PITCH, ROLL, Z,
                     TrainModel)
 
@@ -88,8 +88,8 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
                          x_lead: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Static (steady rolling) state: vehicle DOFs q (m, rad), velocities v and the wheel table.
 
-    ``rail_kin`` (n_ws, 2, 4): rail-head z, dz/dt, y, dy/dt at each wheel (zeros: perfect rigid
-    track). The unknowns are all DOFs except the wheelset spins, whose place is taken by the
+    ``rail_kin`` (n_ws, 2, 4 or 6): rail-head z, dz/dt, y, dy/dt (and the rail's roll and its
+    rate) at each wheel (zeros: perfect rigid track). The unknowns are all DOFs except the wheelset spins, whose place is taken by the
     steady spin-rate perturbations (v at the spin DOFs): steady rolling needs the longitudinal
     creep moment about each axle to vanish (with rails deflected under load the rolling radii
     change slightly). All other velocities are 0. Raises RuntimeError naming the remedy when
@@ -103,7 +103,7 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
     n = model.n_dof
     n_ws = model.n_wheelsets
     if rail_kin is None:
-        rail_kin = np.zeros((n_ws, 2, 4))
+        rail_kin = np.zeros((n_ws, 2, RAIL_KIN_COLS))
     k_susp = (model.stiffness - model.coupler_stiffness).tocsr()
     spin = np.zeros(n, dtype=bool)
     spin[model.wheelset_dofs[:, PITCH]] = True
