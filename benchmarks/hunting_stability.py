@@ -77,7 +77,7 @@ def main():
         out["linear"][f"cone_{lam}"] = {"car": car, "bogie_fixed_body": bogie}
         print(f"  cone {lam}: car {car['speed_kmh']:.1f} ({car['frequency_hz']:.2f} Hz, "
               f"{car['mode']}); bogie, body fixed {bogie['speed_kmh']:.1f}")
-    contact = {"profile": "profiles"}
+    contact = {"profile": "profiles", "contact_points": 1}
     st = statics(contact)
     tangent = lin.contact_slopes(st.geom)
     res = {"amplitude_mm": None, "conicity": tangent.conicity,

@@ -59,7 +59,8 @@ def test_linearised_contact_equals_the_kernels_derivatives(profile):
     differences of the coupled loop's own contact kernel at the static state of one wheelset
     (70 kN per wheel, 80 m/s): every entry within 1e-5 of its row's largest (measured 1.3e-8 for
     the cone, 7.8e-7 for S1002/60E1, whose table is piecewise linear on 0.1 mm)."""
-    geom = build_geometry(ContactParameters(profile=profile))
+    # the one-point contact the linear analysis covers (profiles: contact_points 1)
+    geom = build_geometry(ContactParameters(profile=profile, contact_points=1))
     slopes = lin.contact_slopes(geom)
     speed = 80.0
     p0 = geom.hertz_g * LOAD ** (2.0 / 3.0) / np.cos(slopes.row0[COL_DELTA])
@@ -178,7 +179,7 @@ def test_s1002_hunts_on_a_limit_cycle_between_the_quasi_linear_and_the_tangent_s
     (below 1e-3 of it after 6 s). Measured: 8e-7 of the small disturbance left, a 0.395 mm
     limit cycle, 5e-7 of the large one left below (benchmarks/hunting_stability.py maps the
     whole branch: it dies between 215 and 216 km/h, 3.7 % above the quasi-linear 207.9)."""
-    contact = {"profile": "profiles"}
+    contact = {"profile": "profiles", "contact_points": 1}
     statics = _car(contact)
     centre = lin.contact_slopes(statics.geom)
     tangent = lin.critical_speed(lambda v: lin.car_system(statics, centre, v), 100.0, 300.0, 20)
@@ -208,3 +209,11 @@ def test_growth_rate_of_a_damped_sinusoid():
         rate, freq = sim.growth_rate(t, np.exp(sigma * t) * np.cos(2 * np.pi * f * t + 0.3), 2.0)
         assert rate == pytest.approx(sigma, abs=1e-3)
         assert freq == pytest.approx(f, rel=1e-3)
+
+
+def test_two_point_geometry_is_refused_with_the_remedy():
+    """The linearisation covers one contact point per wheel; a profile pair's two-point
+    geometry (the default for profiles) must be refused, naming contact_points: 1."""
+    geom = build_geometry(ContactParameters(profile="profiles"))
+    with pytest.raises(ValueError, match="contact_points: 1"):
+        _wheelset(geom, 50.0, k_y=1e6, k_yaw=1e6)
