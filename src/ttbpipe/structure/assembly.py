@@ -6,7 +6,9 @@ Sparse global matrices for modal analysis, the time-step check and the tests:
 
 The parts: the line geometry in :mod:`.layout`, the carriers of the random properties in
 :mod:`.carriers`, the link accumulator in :mod:`.links`, the global matrices in :mod:`.matrices`;
-their public names stay importable from here. Rail 0 is the left rail (+y), rail 1 the right.
+their public names stay importable from here. Rail 0 is the left rail (+y), rail 1 the right;
+on a double-track deck (``layout.tracks: 2``) track k has rails 2k (left) and 2k + 1 (right),
+its own slab, pads, CA mortar (at its own offset on the same girders) and approaches.
 """
 
 from __future__ import annotations
@@ -56,6 +58,11 @@ class StructureModel:
     triple_kinds: list = field(default_factory=list)   # "ca" per triple (pads: pad_*, ballast: bal_*)
     piers: list = field(default_factory=list)   # PierReduction per pier of a given height
     cant: tuple | None = None        # (x knots m, cant angle knots rad) of the track on the deck
+    slab_element_track: np.ndarray | None = None   # track of each slab element (None: all 0)
+
+    @property
+    def n_tracks(self) -> int:
+        return self.layout.n_tracks
 
     @property
     def n_dof(self) -> int:
@@ -159,21 +166,27 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
 
     # ---- DOF numbering -------------------------------------------------------------------
     n_rn = layout.rail_x.size if has_track else 0
+    n_tracks = layout.n_tracks
+    n_rails = 2 * n_tracks if has_track else 0
     off = {"rail": 0}
-    n = 2 * 5 * n_rn
+    n = n_rails * 5 * n_rn
     off["slab"] = n
-    slab_node_dof0 = []
-    for _, xs in (layout.slab_units if has_track else []):
-        slab_node_dof0.append(n + 5 * np.arange(xs.size))
-        n += 5 * xs.size
+    # slab units track after track (each track its own slab on the same units)
+    slab_node_dof0, slab_unit_track = [], []
+    for t in range(n_tracks):
+        for _, xs in (layout.slab_units if has_track else []):
+            slab_node_dof0.append(n + 5 * np.arange(xs.size))
+            slab_unit_track.append(t)
+            n += 5 * xs.size
     ballasted_nodes = np.flatnonzero(layout.rail_zone == "approach") \
         if has_track and lay["approach_track"] == "ballasted" else np.zeros(0, np.int64)
     off["sleeper"] = n
     sleeper_of_node = -np.ones(n_rn, dtype=np.int64)
     sleeper_of_node[ballasted_nodes] = np.arange(ballasted_nodes.size)
-    n += 3 * ballasted_nodes.size
+    ns_track = ballasted_nodes.size        # sleepers per track; track t's are t*ns_track + j
+    n += 3 * n_tracks * ns_track
     off["ballast"] = n
-    n += 2 * ballasted_nodes.size
+    n += 2 * n_tracks * ns_track
     n_piers = max(layout.n_spans - 1, 0)
     tall_piers = pier_c.get("height_m") is not None
     off["pier"] = n
@@ -229,7 +242,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         m_ref = float(rail_c["mass_kg_m"])
         GK0, E0 = float(rail_c["GK_Nm2"]), float(rail_c["E_Pa"])
         rot = float(rail_c["rotary_inertia_scaling"]) / 78.0   # HRZ lumping: m L^3 / 78
-        for r in range(2):
+        for r in range(n_rails):
             m_el = props["rail_mass"][r]
             node0 = 5 * r * n_rn + 5 * np.arange(n_rn - 1)
             for a_dofs, sign in ((node0, 0), (node0 + 5, 1)):
@@ -252,7 +265,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         J_s = rho_s * (b_s * t_s ** 3 + t_s * b_s ** 3) / 12
         rot_s = float(slab_c["rotary_inertia_scaling"]) / 78.0
         rot_sl = float(slab_c["lateral_rotary_inertia_scaling"]) / 78.0
-        for (zone, xs), d0 in zip(layout.slab_units, slab_node_dof0):
+        for (zone, xs), d0 in zip(layout.slab_units * n_tracks, slab_node_dof0):
             Ls = np.diff(xs)
             for a_dofs in (d0[:-1], d0[1:]):
                 np.add.at(mass, a_dofs, 0.5 * m_s * Ls)
@@ -264,7 +277,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
             beam_EIv.append(np.full(Ls.size, E_s * b_s * t_s ** 3 / 12))
             beam_EIl.append(np.full(Ls.size, E_s * t_s * b_s ** 3 / 12))
             beam_GK.append(np.full(Ls.size, G_s * K_tor))
-        ns = ballasted_nodes.size
+        ns = n_tracks * ns_track
         sl0 = off["sleeper"] + 3 * np.arange(ns)
         mass[sl0] = float(bal["sleeper_mass_kg"])
         mass[sl0 + 1] = float(bal["sleeper_mass_kg"])
@@ -282,10 +295,11 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
 
     # ---- links ------------------------------------------------------------------------------
     links = LinkAccumulator()
-    slab_elems = []        # (xa, xb, dof_a, zone)
-    for (zone, xs), d0 in zip(layout.slab_units if has_track else [], slab_node_dof0):
+    slab_elems = []        # (xa, xb, dof_a, dof_b, zone, track)
+    for (zone, xs), d0, t in zip(layout.slab_units * n_tracks if has_track else [],
+                                 slab_node_dof0, slab_unit_track):
         for i in range(xs.size - 1):
-            slab_elems.append((xs[i], xs[i + 1], d0[i], d0[i + 1], zone))
+            slab_elems.append((xs[i], xs[i + 1], d0[i], d0[i + 1], zone, t))
     slab_x = np.array([[e[0], e[1]] for e in slab_elems]).reshape(-1, 2)
 
     def span_rows(x: float):
@@ -304,48 +318,53 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
     t_half = 0.5 * float(slab_c["thickness_m"])
     if has_track:
         bf2 = float(rail_c["foot_width_m"]) ** 2 / 12.0
+        elem_zone = np.array([e[4] for e in slab_elems])
+        elem_track = np.array([e[5] for e in slab_elems], dtype=np.int64)
         for i, x in enumerate(layout.rail_x):
             zone = layout.rail_zone[i]
             kind = lay["bridge_track"] if zone == "bridge" else lay["approach_track"]
-            seat = None
-            if kind == "slab":
-                cand = [j for j, e in enumerate(slab_elems) if e[4] == zone]
-                xa = slab_x[cand, 0]; xb = slab_x[cand, 1]
-                inside = np.flatnonzero((xa <= x + 1e-9) & (x <= xb + 1e-9))
-                j = cand[inside[0]] if inside.size else cand[int(np.argmin(
-                    np.minimum(np.abs(xa - x), np.abs(xb - x))))]
-                xa_j, xb_j, da, db, _ = slab_elems[j]
-                Ls = xb_j - xa_j
-                xi = float(np.clip((x - xa_j) / Ls, 0.0, 1.0))
-                seat = (da, db, xi, Ls)
-            for r in range(2):
-                e_r = half_gauge if r == 0 else -half_gauge
-                rd = 5 * (r * n_rn + i)
-                kz, cz = props["pad_kz"][r, i], props["pad_cz"][r, i]
-                ky, cy = props["pad_ky"][r, i], props["pad_cy"][r, i]
-                k3, c3 = (kz, ky, kz * bf2), (cz, cy, cz * bf2)
+            for t in range(n_tracks):
+                seat = None
                 if kind == "slab":
-                    da, db, xi, Ls = seat
-                    pads["slab"].append((rd, da, db, (xi, Ls, e_r), k3, c3))
-                elif kind == "ballasted":
-                    sd = off["sleeper"] + 3 * sleeper_of_node[i]
-                    pads["ballasted"].append((rd, sd, -1, (0.0, 0.0, e_r), k3, c3))
-                else:  # rigid ground
-                    pads["rigid"].append((rd, -1, -1, (0.0, 0.0, e_r), k3, c3))
+                    cand = np.flatnonzero((elem_zone == zone) & (elem_track == t))
+                    xa = slab_x[cand, 0]; xb = slab_x[cand, 1]
+                    inside = np.flatnonzero((xa <= x + 1e-9) & (x <= xb + 1e-9))
+                    j = cand[inside[0]] if inside.size else cand[int(np.argmin(
+                        np.minimum(np.abs(xa - x), np.abs(xb - x))))]
+                    xa_j, xb_j, da, db, _, _ = slab_elems[j]
+                    Ls = xb_j - xa_j
+                    xi = float(np.clip((x - xa_j) / Ls, 0.0, 1.0))
+                    seat = (da, db, xi, Ls)
+                for r in (2 * t, 2 * t + 1):
+                    e_r = half_gauge if r % 2 == 0 else -half_gauge
+                    rd = 5 * (r * n_rn + i)
+                    kz, cz = props["pad_kz"][r, i], props["pad_cz"][r, i]
+                    ky, cy = props["pad_ky"][r, i], props["pad_cy"][r, i]
+                    k3, c3 = (kz, ky, kz * bf2), (cz, cy, cz * bf2)
+                    if kind == "slab":
+                        da, db, xi, Ls = seat
+                        pads["slab"].append((rd, da, db, (xi, Ls, e_r), k3, c3))
+                    elif kind == "ballasted":
+                        sd = off["sleeper"] + 3 * (t * ns_track + sleeper_of_node[i])
+                        pads["ballasted"].append((rd, sd, -1, (0.0, 0.0, e_r), k3, c3))
+                    else:  # rigid ground
+                        pads["rigid"].append((rd, -1, -1, (0.0, 0.0, e_r), k3, c3))
         # ballast (kernels._ballast_forces): per sleeper its DOFs, its blocks, whether the next
-        # sleeper is adjacent (shear springs between neighbouring blocks)
-        ns = ballasted_nodes.size
+        # sleeper is adjacent (shear springs between neighbouring blocks); track after track,
+        # each on its own ballast (no shear between the tracks' blocks)
+        ns = n_tracks * ns_track
         bal_sleeper = off["sleeper"] + 3 * np.arange(ns, dtype=np.int64)
         bal_block = off["ballast"] + 2 * np.arange(ns, dtype=np.int64)
-        bal_next = np.zeros(ns, dtype=np.int64)
-        if ns > 1:
-            bal_next[:-1] = (np.diff(ballasted_nodes) == 1).astype(np.int64)
+        next_one = np.zeros(ns_track, dtype=np.int64)
+        if ns_track > 1:
+            next_one[:-1] = (np.diff(ballasted_nodes) == 1).astype(np.int64)
+        bal_next = np.tile(next_one, n_tracks)
         # CA mortar (bridge) or foundation (slab on subgrade), per slab element
         b2 = float(slab_c["width_m"]) ** 2 / 12.0
         h_deck = float(g_c["deck_height_m"])
-        e_track = float(g_c["track_offset_m"])
         sub = cfg["slab_on_subgrade"]
-        for j, (xa, xb, da, db, zone) in enumerate(slab_elems):
+        for j, (xa, xb, da, db, zone, t) in enumerate(slab_elems):
+            e_track = float(layout.track_offsets_m[t])
             if zone == "bridge":
                 kz, cz = props["ca_kz"][j], props["ca_cz"][j]
                 ky, cy = props["ca_ky"][j], props["ca_cy"][j]
@@ -438,9 +457,9 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         span_n=np.array([red.n for red in blocks], dtype=np.int64),
         span_mat0=np.array(mat0, dtype=np.int64), span_K=cat(Kf), span_C=cat(Cf),
         span_Minv=cat(Mi), span_scratch=np.zeros(max([red.n for red in blocks] + [1])),
-        n_rails=2 if has_track else 0, rail_x0=float(layout.rail_x[0]),
+        n_rails=n_rails, rail_x0=float(layout.rail_x[0]),
         rail_dx=float(layout.rail_x[1] - layout.rail_x[0]), rail_n_nodes=int(n_rn),
-        rail_dof0=np.array([0, 5 * n_rn], dtype=np.int64),
+        rail_dof0=5 * n_rn * np.arange(max(n_rails, 2), dtype=np.int64),
         tri_ptr=tptr, tri_dof=tdof, tri_coef=tcoef, tri_k=tk, tri_c=tc,
         pad_rail=pad_int(0), pad_seat_a=pad_int(1), pad_seat_b=pad_int(2), pad_geom=pad_flt(3),
         pad_k=pad_flt(4), pad_c=pad_flt(5),
@@ -457,11 +476,13 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
     info = dict(off, n_diag=n_diag, n_dof=n_dof, span_dof0=span_dof0, n_piers=n_piers,
                 pier_top_dof0=pier_top_dof0, block_dof0=block_dof0,
                 block_mass=[red.M for red in blocks],
-                n_sleepers=int(ballasted_nodes.size), n_rail_nodes=n_rn,
+                n_sleepers=int(n_tracks * ns_track), n_rail_nodes=n_rn,
                 slab_node_dof0=slab_node_dof0, span_block_mass=[red.M for red in spans])
     node_a = np.array([e[2] for e in slab_elems], dtype=np.int64)
     return StructureModel(config=cfg, layout=layout, properties=dict(props), packed=packed,
                           spans=spans, piers=piers, dof_info=info, slab_elements=slab_x,
                           slab_element_node0=node_a, fixed=fixed,
                           link_kinds=[links.kind[i] for i in links.order],
-                          triple_kinds=list(links.tri_kind), cant=cant)
+                          triple_kinds=list(links.tri_kind), cant=cant,
+                          slab_element_track=np.array([e[5] for e in slab_elems],
+                                                      dtype=np.int64))

@@ -30,19 +30,21 @@ PARAMETER_CARRIER = {p: kind for kind, ps in CARRIER_PARAMETERS.items() for p in
 def nominal_properties(cfg: Mapping[str, Any], layout: Layout) -> dict[str, np.ndarray]:
     """Per-carrier nominal property arrays (SI), before random factors.
 
-    Rail and fastener arrays have shape (2, n) (left, right rail); slab and girder arrays (n,).
+    Rail and fastener arrays have shape (2 n_tracks, n) (rail 2k left and 2k + 1 right of
+    track k); slab (track after track) and girder arrays (n,).
     """
     r, f, ca, g = cfg["rail"], cfg["fastener"], cfg["ca"], cfg["girder"]
     n_rel = layout.rail_x.size - 1
     n_fas = layout.rail_x.size
-    n_sel = sum(u[1].size - 1 for u in layout.slab_units)
+    n_r = 2 * layout.n_tracks
+    n_sel = layout.n_tracks * sum(u[1].size - 1 for u in layout.slab_units)
     n_gel = int(sum(layout.girder_n_el))
     full = lambda v, shape: np.full(shape, float(v))  # noqa: E731
     return {
-        "rail_E": full(r["E_Pa"], (2, n_rel)), "rail_mass": full(r["mass_kg_m"], (2, n_rel)),
-        "rail_Iy": full(r["Iy_m4"], (2, n_rel)), "rail_Iz": full(r["Iz_m4"], (2, n_rel)),
-        "pad_kz": full(f["kz_N_m"], (2, n_fas)), "pad_cz": full(f["cz_Ns_m"], (2, n_fas)),
-        "pad_ky": full(f["ky_N_m"], (2, n_fas)), "pad_cy": full(f["cy_Ns_m"], (2, n_fas)),
+        "rail_E": full(r["E_Pa"], (n_r, n_rel)), "rail_mass": full(r["mass_kg_m"], (n_r, n_rel)),
+        "rail_Iy": full(r["Iy_m4"], (n_r, n_rel)), "rail_Iz": full(r["Iz_m4"], (n_r, n_rel)),
+        "pad_kz": full(f["kz_N_m"], (n_r, n_fas)), "pad_cz": full(f["cz_Ns_m"], (n_r, n_fas)),
+        "pad_ky": full(f["ky_N_m"], (n_r, n_fas)), "pad_cy": full(f["cy_Ns_m"], (n_r, n_fas)),
         "ca_kz": full(ca["kz_N_m2"], n_sel), "ca_cz": full(ca["cz_Ns_m2"], n_sel),
         "ca_ky": full(ca["ky_N_m2"], n_sel), "ca_cy": full(ca["cy_Ns_m2"], n_sel),
         "girder_E": full(g["E_Pa"], n_gel), "girder_mass": full(g["mass_kg_m"], n_gel),
@@ -61,12 +63,14 @@ def factored(props: Mapping[str, np.ndarray], factors: Mapping[str, np.ndarray])
         fac = np.asarray(fac, dtype=float)
         base = out[name]
         n = base.shape[-1]
-        if base.ndim == 2 and fac.size == 2 * n:
-            fac = fac.reshape(2, n)
+        n_r = base.shape[0] if base.ndim == 2 else 1
+        if base.ndim == 2 and fac.size == n_r * n:
+            fac = fac.reshape(n_r, n)
         elif fac.shape != (n,) and not (base.ndim == 2 and fac.shape == base.shape):
             raise ValueError(f"factor {name!r}: {fac.size} values, but the structure has {n} "
                              f"{PARAMETER_CARRIER[name]} carriers"
-                             + (f" (or {2 * n} for both rails)" if base.ndim == 2 else "")
+                             + (f" (or {n_r * n} for its {n_r} rails, rail after rail)"
+                                if base.ndim == 2 else "")
                              + "; sample the field at carrier_positions(model)")
         if not np.all(np.isfinite(fac)) or np.any(fac <= 0):
             bad = int(np.sum(~np.isfinite(fac) | (fac <= 0)))
@@ -79,9 +83,10 @@ def factored(props: Mapping[str, np.ndarray], factors: Mapping[str, np.ndarray])
 def carrier_positions(model: "StructureModel") -> dict[str, np.ndarray]:
     """x (m) of every carrier, per kind, in the order factor arrays must follow.
 
-    rail_element: element midpoints (shared by both rails); fastener: rail node positions (one
-    seat per rail per position); slab_element: element midpoints of all slab units; girder_element:
-    element midpoints of each span's FE mesh, span after span.
+    rail_element: element midpoints (shared by every rail); fastener: rail node positions (one
+    seat per rail per position); slab_element: element midpoints of all slab units (track after
+    track on a double-track deck); girder_element: element midpoints of each span's FE mesh,
+    span after span.
     """
     lay = model.layout
     x = lay.rail_x

@@ -109,9 +109,11 @@ def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
             raise ValueError(f"monitor {name}: the structure has no rails")
         x = float(spec["x_m"])
         rail = int(spec.get("rail", 0))
-        if rail not in (0, 1) or not lay.rail_x[0] <= x <= lay.rail_x[-1]:
+        n_rails = int(model.packed.n_rails)
+        if not 0 <= rail < n_rails or not lay.rail_x[0] <= x <= lay.rail_x[-1]:
             raise ValueError(f"monitor {name}: rail {rail} at x={x} m is outside the rails "
-                             f"[{lay.rail_x[0]}, {lay.rail_x[-1]}] m or rail is not 0/1")
+                             f"[{lay.rail_x[0]}, {lay.rail_x[-1]}] m or rail is not in "
+                             f"0..{n_rails - 1}")
         mesh = rail_mesh(model.packed, 0.0)
         h = mesh.dx
         e = min(int(x / h), lay.rail_x.size - 2)
@@ -119,10 +121,14 @@ def point_rows(model, spec: Mapping[str, Any]) -> dict[str, tuple]:
         return _beam_rows(a, a + NODE_DOFS, h, (x - lay.rail_x[e]) / h)
     if kind == "slab":
         x = float(spec["x_m"])
+        track = int(spec.get("track", 0))
         se = model.slab_elements
-        inside = np.flatnonzero((se[:, 0] <= x) & (x <= se[:, 1])) if se.size else []
+        on = (se[:, 0] <= x) & (x <= se[:, 1]) if se.size else np.zeros(0, bool)
+        if model.slab_element_track is not None and se.size:
+            on &= model.slab_element_track == track
+        inside = np.flatnonzero(on)
         if len(inside) == 0:
-            raise ValueError(f"monitor {name}: no slab at x={x} m")
+            raise ValueError(f"monitor {name}: no slab of track {track} at x={x} m")
         j = int(inside[0])
         a = int(model.slab_element_node0[j])
         L = se[j, 1] - se[j, 0]
@@ -183,15 +189,17 @@ def compile_monitors(model, specs: Sequence[Mapping[str, Any]]) -> MonitorSet:
                       np.array(coef, float), np.array(qty, np.int64), np.array(scale, float))
 
 
-_DECK_COLUMN = re.compile(r"^deck_(left|right)_span(\d+)_mid_([zy])_(acc_m_s2|disp_mm)$")
+_DECK_COLUMN = re.compile(r"^deck_(?:track\d+_)?(left|right)_span(\d+)_mid_([zy])_"
+                          r"(acc_m_s2|disp_mm)$")
 _GIRDER_COLUMN = re.compile(r"^girder_span(\d+)_mid_([zy])_(acc_m_s2|disp_mm)$")
 
 
 def deck_columns(columns, axis: str, quantity: str = "acc_m_s2") -> dict[int, list[str]]:
     """{span (1-based): history columns of the deck at midspan} for ``axis`` z | y.
 
-    The deck-surface monitors under the rails (:func:`default_monitors`) where the run has them,
-    else the girder's shear centre (runs with their own monitor lists).
+    The deck-surface monitors under the rails (:func:`default_monitors`; under every track's
+    rails on a double-track deck) where the run has them, else the girder's shear centre (runs
+    with their own monitor lists).
     """
     deck: dict[int, list[str]] = {}
     girder: dict[int, list[str]] = {}
@@ -205,19 +213,29 @@ def deck_columns(columns, axis: str, quantity: str = "acc_m_s2") -> dict[int, li
     return dict(sorted((deck or girder).items()))
 
 
-def deck_monitor_name(side: str, span: int) -> str:
-    """Name of the default deck monitor under rail ``side`` (left | right) of 1-based ``span``."""
-    return f"deck_{side}_span{span}_mid"
+def deck_monitor_name(side: str, span: int, track: int | None = None) -> str:
+    """Name of the default deck monitor under rail ``side`` (left | right) of 1-based ``span``
+    (of 1-based ``track`` on a double-track deck: ``deck_track2_left_span1_mid``)."""
+    return f"deck_{side}_span{span}_mid" if track is None else \
+        f"deck_track{track}_{side}_span{span}_mid"
 
 
 def default_monitors(model) -> list[dict]:
     """At every span's midspan: the left rail, the slab, the girder's shear centre and the deck
     surface under each rail, at the track's offset ``girder.track_offset_m`` (vertical under
     both, lateral under the left: the deck surface's lateral motion is the same under both)
-    and, with ``girder.deck_width_m``, at both deck edges (vertical); every pier."""
+    and, with ``girder.deck_width_m``, at both deck edges (vertical); every pier.
+
+    On a double-track deck the rail, slab and deck monitors are per track, named with the
+    1-based track: ``rail_track1_left_span1_mid`` (both rails of every track),
+    ``slab_track2_span1_mid``, ``deck_track1_right_span1_mid`` (under each rail of every
+    track, at its offset ``girder.track_offsets_m``); the girder, deck-edge and pier monitors
+    are the structure's, named as on a single track."""
+    if model.n_tracks > 1:
+        return _double_track_monitors(model)
     out = []
     half_gauge = 0.5 * float(model.config["fastener"]["rail_centre_distance_m"])
-    track = float(model.config["girder"]["track_offset_m"])
+    track = float(model.layout.track_offsets_m[0])
     deck_width = model.config["girder"].get("deck_width_m")
     for s, red in enumerate(model.spans):
         x = red.start_m + 0.5 * red.length_m
@@ -240,7 +258,43 @@ def default_monitors(model) -> list[dict]:
                 out.append({"name": f"deck_edge_{side}_span{s + 1}_mid", "kind": "girder",
                             "span": s, "position": 0.5, "deck_surface": True,
                             "lateral_offset_m": e, "directions": ["z"]})
-    for p in range(model.dof_info["n_piers"]):
-        out.append({"name": f"pier{p + 1}", "kind": "pier", "pier": p,
-                    "directions": ["z", "y"]})
+    out += _pier_monitors(model)
     return out
+
+
+def _pier_monitors(model) -> list[dict]:
+    return [{"name": f"pier{p + 1}", "kind": "pier", "pier": p, "directions": ["z", "y"]}
+            for p in range(model.dof_info["n_piers"])]
+
+
+def _double_track_monitors(model) -> list[dict]:
+    """:func:`default_monitors` of a double-track deck (its docstring)."""
+    out = []
+    half_gauge = 0.5 * float(model.config["fastener"]["rail_centre_distance_m"])
+    deck_width = model.config["girder"].get("deck_width_m")
+    se = model.slab_elements
+    for s, red in enumerate(model.spans):
+        x = red.start_m + 0.5 * red.length_m
+        out.append({"name": f"girder_span{s + 1}_mid", "kind": "girder", "span": s,
+                    "position": 0.5, "directions": ["z", "y"]})
+        for t, e_track in enumerate(model.layout.track_offsets_m):
+            tag = f"track{t + 1}"
+            for side, rail in (("left", 2 * t), ("right", 2 * t + 1)):
+                if model.packed.n_rails:
+                    out.append({"name": f"rail_{tag}_{side}_span{s + 1}_mid", "kind": "rail",
+                                "rail": rail, "x_m": x, "directions": ["z", "y"]})
+            if se.size and np.any((se[:, 0] <= x) & (x <= se[:, 1])
+                                  & (model.slab_element_track == t)):
+                out.append({"name": f"slab_{tag}_span{s + 1}_mid", "kind": "slab", "x_m": x,
+                            "track": t, "directions": ["z", "y"]})
+            for side, e, directions in (("left", e_track + half_gauge, ["z", "y"]),
+                                        ("right", e_track - half_gauge, ["z"])):
+                out.append({"name": deck_monitor_name(side, s + 1, t + 1), "kind": "girder",
+                            "span": s, "position": 0.5, "deck_surface": True,
+                            "lateral_offset_m": e, "directions": directions})
+        if deck_width is not None:
+            for side, e in (("left", 0.5 * deck_width), ("right", -0.5 * deck_width)):
+                out.append({"name": f"deck_edge_{side}_span{s + 1}_mid", "kind": "girder",
+                            "span": s, "position": 0.5, "deck_surface": True,
+                            "lateral_offset_m": e, "directions": ["z"]})
+    return out + _pier_monitors(model)

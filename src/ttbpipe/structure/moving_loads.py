@@ -12,6 +12,11 @@ Sign convention: forces in the structure's axes (z up, y left); a wheel pressing
 ``Fz_N < 0``. ``axle_train.wheel_load_N`` is given as a positive magnitude and applied downwards;
 ``axle_train.train: NAME`` takes the axles and their loads from the train library
 (:mod:`ttbpipe.trains`, e.g. ``HSLM-A1``), half of each axle load on each rail.
+
+Double-track decks (``structure.layout.tracks: 2``): a load's ``rail`` is 0..3 (track k has
+rails 2k, 2k + 1); an axle train runs on ``track`` k in ``direction`` +1 (+x) or -1 (-x: its
+axles trail at x_front + d and it moves at -V); ``loads.axle_trains`` lists several trains
+(two trains meeting on the bridge).
 """
 
 from __future__ import annotations
@@ -48,6 +53,7 @@ class LoadSet:
     freq: np.ndarray
     phase: np.ndarray
     target: str = "rail"
+    track: np.ndarray | None = None   # track of each load (girder target: its offset); None: 0
 
     @property
     def n(self) -> int:
@@ -103,14 +109,18 @@ def axle_train_loads(train: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
-    """LoadSet from the ``loads:`` section of a case config."""
+    """LoadSet from the ``loads:`` section of a case config (``axle_train`` and/or a list of
+    ``axle_trains``; a point load's ``speed_kmh`` < 0 moves it towards -x)."""
     speed_default = float(loads_cfg.get("speed_kmh", 0.0)) / 3.6
+    n_rails = 2 * model.n_tracks
     rows = []
     for i, p in enumerate(loads_cfg.get("point_loads") or []):
         where = f"loads.point_loads[{i}]"
         rail = int(p.get("rail", 0))
-        if rail not in (0, 1):
-            raise ValueError(f"{where}.rail: {rail}; expected 0 (left) or 1 (right)")
+        if not 0 <= rail < n_rails:
+            raise ValueError(f"{where}.rail: {rail}; expected 0 (left) or 1 (right)"
+                             + (f", 2k or 2k + 1 on track k < {n_rails // 2}"
+                                if n_rails > 2 else ""))
         h = p.get("harmonic") or {}
         rows.append((rail, float(p.get("x0_m", 0.0)),
                      float(p["speed_kmh"]) / 3.6 if "speed_kmh" in p else speed_default,
@@ -119,14 +129,25 @@ def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
                      [float(h.get("Fz_amplitude_N", 0.0)), float(h.get("Fy_amplitude_N", 0.0)),
                       float(h.get("Mx_amplitude_Nm", 0.0))],
                      float(h.get("frequency_hz", 0.0)), float(h.get("phase_rad", 0.0))))
-    train = loads_cfg.get("axle_train")
-    if train:
+    trains = [("loads.axle_train", loads_cfg["axle_train"])] if loads_cfg.get("axle_train") \
+        else []
+    trains += [(f"loads.axle_trains[{i}]", t)
+               for i, t in enumerate(loads_cfg.get("axle_trains") or [])]
+    for where, train in trains:
         offsets, wheel_loads = axle_train_loads(train)
         x_front = float(train.get("front_x0_m", 0.0))
         v = float(train["speed_kmh"]) / 3.6 if "speed_kmh" in train else speed_default
+        track = int(train.get("track", 0))
+        if not 0 <= track < model.n_tracks:
+            raise ValueError(f"{where}.track: {track}; the structure has {model.n_tracks} "
+                             "track(s), 0-based")
+        direction = int(train.get("direction", 1))
+        if direction not in (1, -1):
+            raise ValueError(f"{where}.direction: {direction}; expected 1 (+x) or -1 (-x)")
         for d, P in zip(offsets, wheel_loads):
-            for rail in (0, 1):
-                rows.append((rail, x_front - d, v, [-P, 0.0, 0.0], [0.0, 0.0, 0.0], 0.0, 0.0))
+            for rail in (2 * track, 2 * track + 1):
+                rows.append((rail, x_front - direction * d, direction * v, [-P, 0.0, 0.0],
+                             [0.0, 0.0, 0.0], 0.0, 0.0))
     if not rows:
         raise ValueError("loads: no loads; give loads.point_loads and/or loads.axle_train")
     target = loads_cfg.get("target", "rail" if model.packed.n_rails else "girder")
@@ -135,29 +156,32 @@ def build_loads(loads_cfg: Mapping[str, Any], model) -> LoadSet:
     if target == "rail" and model.packed.n_rails == 0:
         raise ValueError("loads.target: rail, but the structure has no track "
                          "(layout.bridge_track: none); use target: girder")
-    return LoadSet(rail=np.array([r[0] for r in rows], np.int64),
+    rail = np.array([r[0] for r in rows], np.int64)
+    return LoadSet(rail=rail,
                    x0=np.array([r[1] for r in rows]), speed=np.array([r[2] for r in rows]),
                    F0=np.array([r[3] for r in rows]), F1=np.array([r[4] for r in rows]),
                    freq=np.array([r[5] for r in rows]), phase=np.array([r[6] for r in rows]),
-                   target=target)
+                   target=target, track=rail // 2)
 
 
 def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
     """(dofs, table (n_steps+1, n)) of generalised girder forces of loads acting on the girder.
 
-    The load's rail is ignored: it acts on the track's centre line, ``girder.track_offset_m``
-    to the left of the girder axis, so Fz adds the torque e Fz to Mx (paper eq. 24). A load on
-    the common end of two spans acts on the first. Vectorised over the steps: each load's span
-    rows at all its positions (``SpanReduction.rows_at_many``).
+    The load's rail is ignored: it acts on its track's centre line, e = ``girder.track_offset_m``
+    (or that track's ``track_offsets_m``) to the left of the girder axis, so Fz adds the torque
+    e Fz to Mx (paper eq. 24). A load on the common end of two spans acts on the first.
+    Vectorised over the steps: each load's span rows at all its positions
+    (``SpanReduction.rows_at_many``).
     """
     spans = model.spans
-    e_track = float(model.config["girder"]["track_offset_m"])
+    track = np.zeros(loads.n, np.int64) if loads.track is None else loads.track
     off = model.dof_info["span_dof0"]
     dofs = np.concatenate([np.arange(o, o + s.n) for o, s in zip(off, spans)]).astype(np.int64)
     table = np.zeros((n_steps + 1, dofs.size))
     col0 = np.cumsum([0] + [s.n for s in spans])
     t = np.arange(n_steps + 1) * dt
     for i in range(loads.n):
+        e_track = float(model.layout.track_offsets_m[track[i]])
         x = loads.x0[i] + loads.speed[i] * t
         F = loads.F0[i][None, :] + loads.F1[i][None, :] * np.sin(
             2 * np.pi * loads.freq[i] * t + loads.phase[i])[:, None]
@@ -175,12 +199,14 @@ def girder_force_table(model, loads: LoadSet, dt: float, n_steps: int):
 
 
 def default_duration(model, loads: LoadSet) -> float:
-    """Time until the last load has left the structure's far end (or 1 s for static loads)."""
+    """Time until the last load has left the structure at the end it runs to (or 1 s for
+    static loads)."""
     x_end = model.layout.total_m
-    moving = loads.speed > 0
+    moving = loads.speed != 0
     if not np.any(moving):
         return 1.0
-    return float(np.max((x_end - loads.x0[moving]) / loads.speed[moving]))
+    v = loads.speed[moving]
+    return float(np.max(np.where(v > 0, x_end - loads.x0[moving], -loads.x0[moving]) / v))
 
 
 #: The loads as the loop reads them: rail, x at t = 0, speed, constant (Fz, Fy, Mx) and harmonic

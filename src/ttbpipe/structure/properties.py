@@ -93,6 +93,9 @@ GIRDER = {
     # shear centre, + to the left (rail 0's side): the seed paper's eq. 24 term B_r - b_s/2;
     # about 2.5 m for each track of a double-track box girder [V]
     "track_offset_m": 0.0,
+    # a double-track deck (layout.tracks: 2): one offset per track, track k's rails 2k, 2k+1;
+    # null: 2.5 and -2.5 (tracks 5.0 m apart, TB 10621-2014 [M]); structure.layout.track_offsets
+    "track_offsets_m": None,
     # deck width (m): with a value, default monitors also at both deck edges (null: none)
     "deck_width_m": None,
 }
@@ -175,6 +178,9 @@ LAYOUT = {
     "spans_m": [32.0, 32.0, 32.0, 32.0, 32.0],
     "approach_track": "ballasted",   # ballasted (the paper) | slab | rigid (pads on rigid ground)
     "bridge_track": "slab",          # slab | rigid | none (girder only, no track: validation)
+    # tracks side by side on the same girders, each with its own rails, pads, slab (CA to the
+    # girder at its offset, girder.track_offsets_m) and approaches: 1 | 2
+    "tracks": 1,
 }
 
 DEFAULTS: dict[str, Any] = {

@@ -44,9 +44,11 @@ def property_factors(props_cfg: Mapping[str, Any] | None, model) -> dict[str, np
                 draw = rng.lognormal(-0.5 * s * s, s, size=n)   # mean 1, drawn for every name
                 if p in ind["parameters"]:
                     factors[p] = factors.get(p, 1.0) * draw
+    n_rails = max(int(model.packed.n_rails), 2)
     for p, f in factors.items():
         n = positions[PARAMETER_CARRIER[p]].size
-        if np.size(f) not in (n, 2 * n):
+        rails = PARAMETER_CARRIER[p] in ("rail_element", "fastener")
+        if np.size(f) not in ((n, n_rails * n) if rails else (n, 2 * n)):
             raise ValueError(f"properties: {p} has {np.size(f)} factors but the structure has {n} "
                              f"{PARAMETER_CARRIER[p]} carriers; sample the fields at "
                              "ttbpipe.structure.carrier_positions(model)")
