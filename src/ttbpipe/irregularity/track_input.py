@@ -10,7 +10,8 @@ reads its rail's profile at its own x with :func:`irregularity_at`.
 The track is perfect behind the leading wheelset's start and the irregularity fades in with a
 raised cosine over ``fade_in_m`` ahead of it, starting two grid steps ahead so that the
 interpolated value and slope are exactly 0 at the start: the gravity-loaded static state at
-t = 0 is exact and every wheel sees the same profile at the same x.
+t = 0 is exact and every wheel sees the same profile at the same x. For a train running -x
+(``direction=-1``) "ahead" is towards -x.
 """
 
 from __future__ import annotations
@@ -60,14 +61,16 @@ def read_profile_file(path: str) -> pd.DataFrame:
 
 
 def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: float,
-                       x_fade_start: float, profile: pd.DataFrame | None = None) -> Irregularity:
+                       x_fade_start: float, profile: pd.DataFrame | None = None,
+                       direction: int = 1) -> Irregularity:
     """Rail inputs over [x_start, x_end] from an ``irregularity`` section.
 
     ``source``: ``synthetic`` (``spectrum``, ``seed``, ``dx_m``, ``amplitudes``), ``file``
     (``file``: a profile table on disk), ``none``; or pass ``profile`` (a profile table in
     memory, x = chainage_m), which takes the place of the source. ``scale`` multiplies every
     channel, ``channels`` keeps some of them (the others zero), ``fade_in_m`` is the fade-in
-    length. ``amplitudes``: ``random_phase`` (default, deterministic amplitudes) or
+    length, ahead of ``x_fade_start`` in the train's ``direction`` (+1: +x, -1: -x).
+    ``amplitudes``: ``random_phase`` (default, deterministic amplitudes) or
     ``gaussian`` (random Fourier coefficients, a stationary Gaussian profile;
     :mod:`ttbpipe.irregularity.synthesis`, docs/irregularity.md "Gaussian representation").
     """
@@ -111,7 +114,8 @@ def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: flo
     fade = float(cfg.get("fade_in_m", 20.0))
     # start two grid steps ahead so that the interpolated value AND slope are exactly 0 at the
     # leading wheelset's start (central-difference slopes reach one point back)
-    s = np.clip((chain - x_fade_start - 2.0 * dx) / max(fade, 1e-9), 0.0, 1.0)
+    ahead = chain - x_fade_start if direction > 0 else x_fade_start - chain
+    s = np.clip((ahead - 2.0 * dx) / max(fade, 1e-9), 0.0, 1.0)
     window = 0.5 - 0.5 * np.cos(np.pi * s)
     values = values * window
     slopes = np.gradient(values, dx, axis=1)

@@ -14,6 +14,11 @@ step, or the irregularity, or a loss of contact; :mod:`ttbpipe.simulation.diagno
 wheel-rail contact is counted at every step and reported as its own index (summary
 ``contact_loss_*``); Q/P is defined in contact only. Nothing non-finite leaves
 :func:`run_coupled` (:func:`~ttbpipe.simulation.outputs.check_finite`).
+
+On a double-track deck a train runs on either track in either direction
+(``simulation.track_index``, ``simulation.direction``) and a second train may share the run
+(``second_train``: two trains meeting on the bridge; its columns and indices prefixed
+``train2_``, :func:`~ttbpipe.simulation.outputs.add_second_train`).
 """
 
 from __future__ import annotations
@@ -27,7 +32,8 @@ import pandas as pd
 from ..irregularity.track_input import Irregularity
 from ..threads import pinned
 from .loop import STATUS_MESSAGES, RawResult, SimulationStopped, integrate  # noqa: F401
-from .outputs import DECK_FILTER_HZ, check_finite, results_table, summarise
+from .outputs import (DECK_FILTER_HZ, add_second_train, check_finite, placement,
+                      results_table, summarise)
 from .setup import CoupledSetup, diagnosis_limits, prepare  # noqa: F401
 
 log = logging.getLogger(__name__)
@@ -36,17 +42,21 @@ log = logging.getLogger(__name__)
 @pinned
 def run_coupled(case_config: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | None = None,
                 factors: Mapping[str, np.ndarray] | None = None,
-                propose_auto: bool = False) -> tuple[pd.DataFrame, dict]:
+                propose_auto: bool = False,
+                second_track: Irregularity | pd.DataFrame | None = None
+                ) -> tuple[pd.DataFrame, dict]:
     """Run one coupled case: (time-history table, summary dict).
 
     ``track`` / ``factors``: the track input and the structure's property factors in memory
-    (:func:`~ttbpipe.simulation.setup.prepare`); no file is read or written for them.
+    (:func:`~ttbpipe.simulation.setup.prepare`); no file is read or written for them;
+    ``second_track``: the second train's track input (``second_train``).
     Raises :class:`SimulationStopped` (a RuntimeError) when the loop stops, with the likely
     cause, and ValueError for a refused time step (``propose_auto``: see :func:`prepare`) or a
     non-finite result (:func:`check_finite`). A run in which wheels lose contact completes: the
     loss is reported (summary ``contact_loss_*``, a warning with its likely cause).
     """
-    setup = prepare(case_config, track=track, factors=factors, propose_auto=propose_auto)
+    setup = prepare(case_config, track=track, factors=factors, propose_auto=propose_auto,
+                    second_track=second_track)
     log.info("coupled run: %d cars, %.1f km/h, dt %.2e s, %d steps, track %s", setup.train.n_cars,
              setup.speed * 3.6, setup.dt, setup.n_steps,
              "rigid" if setup.structure is None else f"{setup.packed.n_dof} structural DOF")
@@ -54,6 +64,10 @@ def run_coupled(case_config: Mapping[str, Any], *, track: Irregularity | pd.Data
     table = results_table(setup, raw)
     deck_filter = float((case_config.get("simulation") or {}).get("deck_filter_hz", DECK_FILTER_HZ))
     summary = summarise(setup, raw, table, deck_filter)
+    if setup.second is not None:
+        table, summary = add_second_train(setup, raw, table, summary, deck_filter)
+    elif setup.direction != 1 or (setup.structure is not None and setup.structure.n_tracks > 1):
+        summary["trains"] = [placement(setup)]
     check_finite(setup, table, summary)
     if summary["contact_loss_count"] > 0:
         from .diagnosis import explain

@@ -56,69 +56,138 @@ def track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin):
     """rail_kin[ws, side] = (z, dz/dt, y, dy/dt, theta, dtheta/dt) of the rail head under every
     wheel: the structure's (rail head moved by the roll theta) plus the irregularity of that
     rail (its time derivative is V times its slope); the roll only where ``rail_kin`` has its
-    6 columns (ttbpipe.vehicle.kernels.RAIL_KIN_COLS)."""
-    with_roll = rail_kin.shape[2] > 4
-    h = mesh.head_height
-    for w in range(ws_x.shape[0]):
-        x = ws_x[w]
-        for k in range(2):
-            z, vz, y, vy, r, vr = rail_point_kinematics(mesh, k, x, disp, vel)
-            zi, dzi = irregularity_at(track, k, x)
-            yi, dyi = irregularity_at(track, 2 + k, x)
-            rail_kin[w, k, 0] = z + zi
-            rail_kin[w, k, 1] = vz + speed * dzi
-            rail_kin[w, k, 2] = (y - h * r) + yi
-            rail_kin[w, k, 3] = (vy - h * vr) + speed * dyi
-            if with_roll:
-                rail_kin[w, k, 4] = r
-                rail_kin[w, k, 5] = vr
+    6 columns (ttbpipe.vehicle.kernels.RAIL_KIN_COLS). A train on rails 0, 1 running +x
+    (:func:`placed_track_kinematics`)."""
+    placed_track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin, 0, 1)
 
 
 @njit(cache=True)
-def _evaluate(t, state, vehicle, work, packed, mesh, track, speed, creep_relax, ws_x, rail_kin):
+def placed_track_kinematics(mesh, track, disp, vel, ws_s, speed, rail_kin, rail0, direction):
+    """:func:`track_kinematics` of a train on the track whose left rail is ``rail0`` (track k:
+    rail 2k), running in ``direction`` +1 (+x) or -1 (-x), in the train's own axes.
+
+    ``ws_s``: the wheelsets' positions along the train's direction of travel (x = direction s).
+    A train running -x has its axes turned by 180 degrees about z (x' = -x, y' = -y, z' = z):
+    its left wheel (side 0) runs on the track's right rail and its right wheel on the left
+    one, lateral displacements and rolls change sign (y' = -y, theta' = -theta; y' - h theta'
+    = -(y - h theta)), and a profile's time derivative at the wheel is -V times its slope.
+    The irregularity ``track`` is that track's, in the structure's axes (channels z_left,
+    z_right, y_left, y_right of its rails 2k, 2k + 1)."""
+    with_roll = rail_kin.shape[2] > 4
+    h = mesh.head_height
+    for w in range(ws_s.shape[0]):
+        if direction > 0:
+            x = ws_s[w]
+            for k in range(2):
+                z, vz, y, vy, r, vr = rail_point_kinematics(mesh, rail0 + k, x, disp, vel)
+                zi, dzi = irregularity_at(track, k, x)
+                yi, dyi = irregularity_at(track, 2 + k, x)
+                rail_kin[w, k, 0] = z + zi
+                rail_kin[w, k, 1] = vz + speed * dzi
+                rail_kin[w, k, 2] = (y - h * r) + yi
+                rail_kin[w, k, 3] = (vy - h * vr) + speed * dyi
+                if with_roll:
+                    rail_kin[w, k, 4] = r
+                    rail_kin[w, k, 5] = vr
+        else:
+            x = -ws_s[w]
+            for k in range(2):
+                g = 1 - k                 # the train's left wheel on the track's right rail
+                z, vz, y, vy, r, vr = rail_point_kinematics(mesh, rail0 + g, x, disp, vel)
+                zi, dzi = irregularity_at(track, g, x)
+                yi, dyi = irregularity_at(track, 2 + g, x)
+                rail_kin[w, k, 0] = z + zi
+                rail_kin[w, k, 1] = vz - speed * dzi
+                rail_kin[w, k, 2] = -((y - h * r) + yi)
+                rail_kin[w, k, 3] = -((vy - h * vr) - speed * dyi)
+                if with_roll:
+                    rail_kin[w, k, 4] = -r
+                    rail_kin[w, k, 5] = -vr
+
+
+@njit(cache=True)
+def add_wheel_loads(mesh, wheel, ws_s, rail0, direction, two_point, nodal_force):
+    """Add to ``nodal_force`` the loads of a train's wheels on its rails: the opposite of the
+    force of the rail on each wheel (``wheel``: the contact table in the train's axes), with
+    two-point contact also the opposite of its vertical forces' moment about the rail's shear
+    centre (they act off the rail's axis). Placement as :func:`placed_track_kinematics`: a
+    train running -x loads the track's right rail with its left wheel, and its lateral forces
+    and moments change sign in the structure's axes."""
+    for w in range(ws_s.shape[0]):
+        if direction > 0:
+            x = ws_s[w]
+            for k in range(2):
+                if two_point:
+                    add_rail_contact_load(mesh, rail0 + k, x, -wheel[w, k, 2], -wheel[w, k, 1],
+                                          -wheel[w, k, 7], nodal_force)
+                else:
+                    add_rail_head_load(mesh, rail0 + k, x, -wheel[w, k, 2], -wheel[w, k, 1],
+                                       nodal_force)
+        else:
+            x = -ws_s[w]
+            for k in range(2):
+                if two_point:
+                    add_rail_contact_load(mesh, rail0 + 1 - k, x, -wheel[w, k, 2],
+                                          wheel[w, k, 1], wheel[w, k, 7], nodal_force)
+                else:
+                    add_rail_head_load(mesh, rail0 + 1 - k, x, -wheel[w, k, 2], wheel[w, k, 1],
+                                       nodal_force)
+
+
+#: A train as the loops run it: its arrays (ttbpipe.vehicle.dynamics.VehicleArrays,
+#: wheelset positions ``ws_x0`` along its direction of travel), its track's irregularity, its
+#: speed and semi-implicit creep factor, and where it runs: the left rail of its track (track k:
+#: 2k) and its direction (+1: +x, -1: -x; :func:`placed_track_kinematics`).
+PlacedTrain = namedtuple("PlacedTrain", ["vehicle", "track", "speed", "creep_relax", "rail0",
+                                         "direction"])
+
+
+@njit(cache=True)
+def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, first):
+    """One train at time t: its rail kinematics, accelerations (``state.a``) and wheel table
+    (``work.wheel``); adds its wheel loads to ``state.nodal_force``. ``first``: the evaluation
+    at t = 0 (explicit creep law, as :func:`_coupled_loop`)."""
+    vehicle = placed.vehicle
+    for w in range(ws_s.shape[0]):
+        ws_s[w] = vehicle.ws_x0[w] + placed.speed * t
+    placed_track_kinematics(mesh, placed.track, state.disp, state.vel, ws_s, placed.speed,
+                            rail_kin, placed.rail0, placed.direction)
+    vehicle_accelerations(vehicle, work, state.q, state.v, rail_kin, placed.speed,
+                          0.0 if first else placed.creep_relax, state.a, ws_s[0])
+    add_wheel_loads(mesh, work.wheel, ws_s, placed.rail0, placed.direction,
+                    vehicle.zones.shape[0] > 0, state.nodal_force)
+
+
+@njit(cache=True)
+def _evaluate(t, state, placed, work, packed, mesh, ws_x, rail_kin, first):
     """Accelerations of train and structure at time t for the current displacements and
-    velocities (``work.wheel``: the wheel table of this evaluation)."""
-    for w in range(ws_x.shape[0]):
-        ws_x[w] = vehicle.ws_x0[w] + speed * t
-    track_kinematics(mesh, track, state.disp, state.vel, ws_x, speed, rail_kin)
-    vehicle_accelerations(vehicle, work, state.q, state.v, rail_kin, speed, creep_relax, state.a,
-                          ws_x[0])
+    velocities (``work.wheel``: the wheel table of this evaluation; :func:`_train_loads`)."""
     nodal_force = state.nodal_force
     for i in range(nodal_force.shape[0]):
         nodal_force[i] = 0.0
-    wheel = work.wheel
-    two_point = vehicle.zones.shape[0] > 0
-    for w in range(ws_x.shape[0]):
-        for k in range(2):
-            # the rail carries the opposite of the force of the rail on the wheel (with
-            # two-point contact also the opposite of its vertical forces' moment about the
-            # rail's shear centre: they act off the rail's axis)
-            if two_point:
-                add_rail_contact_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
-                                      -wheel[w, k, 7], nodal_force)
-            else:
-                add_rail_head_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
-                                   nodal_force)
+    _train_loads(t, state, placed, work, mesh, ws_x, rail_kin, first)
     structure_accelerations(packed, state.disp, state.vel, nodal_force, state.acc)
 
 
 @njit(cache=True)
-def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, dt, n_steps,
-                  out_every, creep_relax):
+def _coupled_loop(state, placed, packed, mesh, monitors, train, dt, n_steps, out_every):
     """Zhai explicit integration of train + structure; returns (status, step).
 
-    Output every ``out_every`` steps (row 0 = t 0) into ``train`` (ttbpipe.simulation.recorder):
-    sampled states, and the anti-alias decimated histories of the monitors, wheel forces and
-    vehicle DOFs, fed at every step; peaks and contact loss at every step. ``creep_relax`` > 0: semi-implicit
-    lateral creep (its state starts from the explicit law at t = 0).
+    ``placed``: the train, its track input, speed, creep factor and placement
+    (:data:`PlacedTrain`). Output every ``out_every`` steps (row 0 = t 0) into ``train``
+    (ttbpipe.simulation.recorder): sampled states, and the anti-alias decimated histories of the
+    monitors, wheel forces and vehicle DOFs, fed at every step; peaks and contact loss at every
+    step. ``placed.creep_relax`` > 0: semi-implicit lateral creep (its state starts from the
+    explicit law at t = 0).
     """
+    vehicle = placed.vehicle
     n_ws = vehicle.ws_dofs.shape[0]
     ws_x = np.zeros(n_ws)
     rail_kin = np.zeros((n_ws, 2, RAIL_KIN_COLS))
     work = _work(state.q.shape[0], n_ws, N_COLS, max(vehicle.zones.shape[0], 1))
     q, v, a, a_prev = state.q, state.v, state.a, state.a_prev
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
-    _evaluate(0.0, state, vehicle, work, packed, mesh, track, speed, 0.0, ws_x, rail_kin)
+    _evaluate(0.0, state, placed, work, packed, mesh, ws_x, rail_kin, True)
     out_row = 0
     for n in range(-1, n_steps):
         if n >= 0:
@@ -129,8 +198,7 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
                 a_prev[i] = a[i]
             for i in range(disp.shape[0]):
                 acc_prev[i] = acc[i]
-            _evaluate((n + 1) * dt, state, vehicle, work, packed, mesh, track, speed,
-                      creep_relax, ws_x, rail_kin)
+            _evaluate((n + 1) * dt, state, placed, work, packed, mesh, ws_x, rail_kin, False)
         step = n + 1
         if record_wheel_step(train, work.wheel, step) == 0:
             return 2, n
@@ -151,14 +219,94 @@ def _coupled_loop(state, vehicle, packed, mesh, track, monitors, train, speed, d
     return 0, n_steps
 
 
+@njit(cache=True)
+def _evaluate_pair(t, state, state_b, placed, placed_b, work, work_b, packed, mesh, scratch,
+                   first):
+    """Accelerations of two trains and the structure at time t (``state_b`` shares the
+    structure's arrays with ``state``); ``scratch`` = (ws_s, rail_kin) of each train."""
+    nodal_force = state.nodal_force
+    for i in range(nodal_force.shape[0]):
+        nodal_force[i] = 0.0
+    ws_s, rail_kin, ws_s_b, rail_kin_b = scratch
+    _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, first)
+    _train_loads(t, state_b, placed_b, work_b, mesh, ws_s_b, rail_kin_b, first)
+    structure_accelerations(packed, state.disp, state.vel, nodal_force, state.acc)
+
+
+@njit(cache=True)
+def _coupled_loop_pair(state, state_b, placed, placed_b, packed, mesh, monitors, recorders,
+                       dt, n_steps, out_every):
+    """:func:`_coupled_loop` with two trains on the structure (the two blocks of one
+    block-diagonal vehicle system, each with its own speed, track and direction; Zhai's
+    scheme on each train's and the structure's states at the same dt). ``recorders``: the two
+    trains' recorders (the first also takes the monitors' decimated histories). Returns
+    (status, step, which train stopped it: 0, 1, or -1 for the structure)."""
+    train, train_b = recorders
+    n_ws = placed.vehicle.ws_dofs.shape[0]
+    n_ws_b = placed_b.vehicle.ws_dofs.shape[0]
+    scratch = (np.zeros(n_ws), np.zeros((n_ws, 2, RAIL_KIN_COLS)), np.zeros(n_ws_b),
+               np.zeros((n_ws_b, 2, RAIL_KIN_COLS)))
+    work = _work(state.q.shape[0], n_ws, N_COLS, max(placed.vehicle.zones.shape[0], 1))
+    work_b = _work(state_b.q.shape[0], n_ws_b, N_COLS, max(placed_b.vehicle.zones.shape[0], 1))
+    no_values = np.zeros(0)
+    disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
+    _evaluate_pair(0.0, state, state_b, placed, placed_b, work, work_b, packed, mesh, scratch,
+                   True)
+    out_row = 0
+    for n in range(-1, n_steps):
+        if n >= 0:
+            psi = 0.0 if n == 0 else 0.5
+            for st in (state, state_b):
+                zhai_predict(st.q, st.v, st.a, st.a_prev, dt, psi, psi)
+                for i in range(st.q.shape[0]):
+                    st.a_prev[i] = st.a[i]
+            zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
+            for i in range(disp.shape[0]):
+                acc_prev[i] = acc[i]
+            _evaluate_pair((n + 1) * dt, state, state_b, placed, placed_b, work, work_b, packed,
+                           mesh, scratch, False)
+        step = n + 1
+        if record_wheel_step(train, work.wheel, step) == 0:
+            return 2, n, 0
+        if record_wheel_step(train_b, work_b.wheel, step) == 0:
+            return 2, n, 1
+        record_monitors(monitors, disp, vel, acc)
+        record_step_channels(train, monitors.current, work.wheel, state.q, state.a)
+        record_step_channels(train_b, no_values, work_b.wheel, state_b.q, state_b.a)
+        if step % out_every == 0:
+            finite, big = record_vehicle_output(train, out_row, step * dt, state.q, state.a)
+            finite_b, big_b = record_vehicle_output(train_b, out_row, step * dt, state_b.q,
+                                                    state_b.a)
+            if not finite:
+                return 1, n, 0
+            if not finite_b:
+                return 1, n, 1
+            for i in range(disp.shape[0]):
+                if not np.isfinite(disp[i]):
+                    return 1, n, -1
+            if big > 0.5:
+                return 3, n, 0
+            if big_b > 0.5:
+                return 3, n, 1
+            record_wheel_output(train, out_row, work.wheel)
+            record_wheel_output(train_b, out_row, work_b.wheel)
+            out_row += 1
+    flush(train.dec)
+    flush(train_b.dec)
+    return 0, n_steps, -1
+
+
 @dataclass
 class RawResult:
-    """Records of a run (before the table is built)."""
+    """Records of a run (before the table is built); ``second``: the second train's records
+    in a two-train run (its ``final`` state in ``final_second``)."""
 
     train: TrainRecorder
     monitors: object           # ttbpipe.structure.monitors.MonitorRecorder
     wall_s: float
     final: CoupledState | None = None   # the state after the last step (a run continues from it)
+    second: TrainRecorder | None = None
+    final_second: CoupledState | None = None
 
     @property
     def time(self) -> np.ndarray:
@@ -198,16 +346,17 @@ class SimulationStopped(RuntimeError):
 
         self.status, self.step = int(status), int(step)
         self.t_s = (step + 1) * setup.dt
-        self.x_lead_m = setup.x_lead0 + setup.speed * self.t_s
+        self.x_lead_m = setup.x_lead0 + setup.velocity * self.t_s
         m = setup.model
-        self.contact_loss = contact_loss_stats(contact_loss, setup.dt, setup.x_lead0 + m.wheelset_x,
-                                               setup.speed, wheel_labels(m))
+        self.contact_loss = contact_loss_stats(contact_loss, setup.dt, setup.wheelset_x0,
+                                               setup.velocity, wheel_labels(m))
         self.cause, text = explain(setup.dt, diagnosis_limits(setup), setup.irregularity_info,
                                    self.contact_loss, setup.irregularity_config, setup.speed,
                                    propose_auto=setup.propose_auto)
         finite = q[np.isfinite(q)]
         big = f"; largest vehicle displacement {np.abs(finite).max():.3f} m" if finite.size else ""
-        super().__init__(f"coupled simulation stopped at t = {self.t_s:.4f} s (leading wheelset at "
+        which = f"{setup.label.rstrip('_')}: " if setup.label else ""
+        super().__init__(f"{which}coupled simulation stopped at t = {self.t_s:.4f} s (leading wheelset at "
                          f"x = {self.x_lead_m:.1f} m): {STATUS_MESSAGES[status]}{big}; {text}")
 
 
@@ -221,23 +370,61 @@ def history_dofs(model) -> tuple[np.ndarray, np.ndarray]:
     return np.array(acc, dtype=np.int64), np.asarray(model.wheelset_dofs[:, 0], dtype=np.int64)
 
 
+def _recorder(setup, n_monitors: int) -> TrainRecorder:
+    m = setup.model
+    return train_recorder(setup.n_steps // setup.out_every + 1, m.n_wheelsets, m.n_dof,
+                          n_monitors, setup.out_every, *history_dofs(m),
+                          spin_dofs=m.wheelset_dofs[:, 3])
+
+
+def _placed(setup) -> PlacedTrain:
+    return PlacedTrain(setup.vehicle, setup.irregularity, float(setup.speed),
+                       float(setup.creep_relax), 2 * int(setup.track_index),
+                       int(setup.direction))
+
+
+def _integrate_pair(setup) -> RawResult:
+    """:func:`integrate` of a two-train run (``setup.second``)."""
+    second = setup.second
+    n_s = setup.disp0.shape[0]
+    structure = (setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s),
+                 np.zeros(n_s))
+    states = []
+    for s in (setup, second):
+        n_v = s.model.n_dof
+        states.append(CoupledState(s.q0.copy(), s.v0.copy(), np.zeros(n_v), np.zeros(n_v),
+                                   *structure))
+    monitors = setup.monitors.recorder()
+    recorders = (_recorder(setup, monitors.qty.shape[0]), _recorder(second, 0))
+    t0 = time.perf_counter()
+    status, step, which = _coupled_loop_pair(states[0], states[1], _placed(setup),
+                                             _placed(second), setup.packed, setup.mesh,
+                                             monitors, recorders, setup.dt, setup.n_steps,
+                                             setup.out_every)
+    wall = time.perf_counter() - t0
+    if status != 0:
+        culprit = second if which == 1 else setup
+        raise SimulationStopped(culprit, status, step, recorders[max(which, 0)].contact_loss,
+                                states[max(which, 0)].q)
+    return RawResult(recorders[0], monitors, wall, states[0], recorders[1], states[1])
+
+
 def integrate(setup) -> RawResult:
     """Run the loop for a prepared case (:func:`ttbpipe.simulation.setup.prepare`); raises
-    :class:`SimulationStopped` with the likely cause when it stops."""
-    m = setup.model
-    n_v = m.n_dof
-    n_out = setup.n_steps // setup.out_every + 1
+    :class:`SimulationStopped` with the likely cause when it stops. A case with a second
+    train (``setup.second``) runs both in one loop (:func:`_coupled_loop_pair`)."""
+    if getattr(setup, "second", None) is not None:
+        return _integrate_pair(setup)
+    n_v = setup.model.n_dof
     n_s = setup.disp0.shape[0]
     state = CoupledState(setup.q0.copy(), setup.v0.copy(), np.zeros(n_v), np.zeros(n_v),
                          setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s),
                          np.zeros(n_s))
     monitors = setup.monitors.recorder() if setup.monitors is not None else no_monitors()
-    train = train_recorder(n_out, m.n_wheelsets, n_v, monitors.qty.shape[0], setup.out_every,
-                           *history_dofs(m), spin_dofs=m.wheelset_dofs[:, 3])
+    train = _recorder(setup, monitors.qty.shape[0])
     t0 = time.perf_counter()
-    status, step = _coupled_loop(state, setup.vehicle, setup.packed, setup.mesh,
-                                 setup.irregularity, monitors, train, setup.speed, setup.dt,
-                                 setup.n_steps, setup.out_every, setup.creep_relax)
+    status, step = _coupled_loop(state, _placed(setup), setup.packed, setup.mesh, monitors, train,
+                                 setup.dt, setup.n_steps, setup.out_every)
     wall = time.perf_counter() - t0
     if status != 0:
         raise SimulationStopped(setup, status, step, train.contact_loss, state.q)

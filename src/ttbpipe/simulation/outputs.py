@@ -69,7 +69,7 @@ def results_table(setup: CoupledSetup, raw) -> pd.DataFrame:
     n_mon = 0 if setup.monitors is None else setup.monitors.n
     hist = decimated(train, n_mon)
     cols: dict[str, np.ndarray] = {"time_s": train.t_out,
-                                   "x_lead_m": setup.x_lead0 + setup.speed * train.t_out}
+                                   "x_lead_m": setup.x_lead0 + setup.velocity * train.t_out}
     for w, lab in enumerate(labels):
         for k, side in enumerate(("left", "right")):
             p = hist["wheel"][:, w, k, 2]
@@ -135,9 +135,8 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
     }
     from .diagnosis import contact_loss_stats
 
-    loss = contact_loss_stats(raw.train.contact_loss, setup.dt,
-                              setup.x_lead0 + setup.model.wheelset_x, setup.speed,
-                              wheel_labels(setup.model))
+    loss = contact_loss_stats(raw.train.contact_loss, setup.dt, setup.wheelset_x0,
+                              setup.velocity, wheel_labels(setup.model))
     out["contact_loss_count"] = float(loss["contact_loss_count"])
     out["contact_loss_total_duration_s"] = float(loss["contact_loss_total_s"])
     out["contact_loss_max_duration_s"] = float(loss["contact_loss_max_s"])
@@ -191,8 +190,8 @@ def summarise(setup: CoupledSetup, raw, table: pd.DataFrame,
         "deck_filter_hz": float(deck_filter_hz),
     }
     from .diagnosis import contact_loss_stats
-    summary.update(contact_loss_stats(raw.train.contact_loss, setup.dt,
-                                      setup.x_lead0 + m.wheelset_x, setup.speed, labels))
+    summary.update(contact_loss_stats(raw.train.contact_loss, setup.dt, setup.wheelset_x0,
+                                      setup.velocity, labels))
     if setup.monitors is not None:
         summary["monitor_peaks"] = {name: float(raw.monitors.peak[i])
                                     for i, name in enumerate(setup.monitors.names)}
@@ -200,6 +199,59 @@ def summarise(setup: CoupledSetup, raw, table: pd.DataFrame,
     summary["sperling"] = _sperling_per_car(setup, table)
     summary.update(response_indices(setup, raw, table, deck_filter_hz))
     return summary
+
+
+#: How the train-side indices of two trains combine into the run's: the largest of the two, or
+#: the sum (counts and total durations over all wheels of both trains).
+_SUMMED = ("contact_loss_count", "contact_loss_total_duration_s")
+
+
+def train_index_names() -> list[str]:
+    """Registry indices computed from a train's own records (not from the structure)."""
+    from ..response_indices import RESPONSE_INDEX_REGISTRY
+
+    structure = ("max_deck_", "max_rail_", "max_girder_")
+    return [r.name for r in RESPONSE_INDEX_REGISTRY if not r.name.startswith(structure)]
+
+
+def placement(setup: CoupledSetup) -> dict:
+    """Where a train ran: its track (0-based), direction (+1: +x), speed."""
+    return {"track_index": int(setup.track_index), "direction": int(setup.direction),
+            "speed_kmh": float(setup.speed * 3.6), "x_lead0_m": float(setup.x_lead0)}
+
+
+def add_second_train(setup: CoupledSetup, raw, table: pd.DataFrame, summary: dict,
+                     deck_filter_hz: float = DECK_FILTER_HZ) -> tuple[pd.DataFrame, dict]:
+    """The second train of a two-train run added to the first's table and summary.
+
+    Table: its columns (wheel forces, Q/P, unloading, H, car-body accelerations, ``x_lead_m``)
+    prefixed ``train2_``; the first train's keep the names of a one-train run, the monitors
+    are the structure's. Summary: the train-side registry indices (:func:`train_index_names`)
+    become the run's over both trains (the larger of the two; contact-loss counts and total
+    durations summed), each train's own as ``train1_<index>`` and ``train2_<index>``; the
+    second train's whole summary (static loads, contact loss per wheel, Sperling per car) in
+    ``second_train``; both placements in ``trains``.
+    """
+    from .loop import RawResult
+    from ..structure.monitors import no_monitors
+
+    second = setup.second
+    raw2 = RawResult(raw.second, no_monitors(), raw.wall_s, raw.final_second)
+    table2 = results_table(second, raw2)
+    summary2 = summarise(second, raw2, table2, deck_filter_hz)
+    table = pd.concat([table, table2.drop(columns="time_s").add_prefix(second.label)], axis=1)
+    out = dict(summary)
+    for name in train_index_names():
+        one, two = summary[name], summary2[name]
+        out[f"train1_{name}"], out[f"{second.label}{name}"] = one, two
+        out[name] = one + two if name in _SUMMED else max(one, two)
+    out["contact_loss_max_s"] = max(summary["contact_loss_max_s"], summary2["contact_loss_max_s"])
+    out["contact_loss_wheels"] = summary["contact_loss_wheels"] + summary2["contact_loss_wheels"]
+    out["contact_loss_total_s"] = (summary["contact_loss_total_s"]
+                                   + summary2["contact_loss_total_s"])
+    out["second_train"] = summary2
+    out["trains"] = [placement(setup), placement(second)]
+    return table, out
 
 
 def _nonfinite_entries(summary: Mapping[str, Any], prefix: str = "") -> list[str]:

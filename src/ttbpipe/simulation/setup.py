@@ -24,18 +24,41 @@ Case configuration (all sections optional; SI units unless the key says otherwis
                                         #  rails end); rigid track: start 0, end = start + length
       rigid_length_m: 200               # rigid track only: run length of the leading wheelset
       margin_m: 5
+      track_index: 0                    # the train's track on a double-track deck (0-based;
+                                        #  structure.layout.tracks: 2)
+      direction: 1                      # 1: the train runs +x; -1: -x (start/end_x_m defaults
+                                        #  mirrored: it enters at the far end of the rails)
     irregularity:                       # ttbpipe.irregularity.track_input.build_irregularity
       source: synthetic | file | none   # default synthetic
       spectrum, seed, dx_m, file, scale, fade_in_m, channels
+    second_train:                       # a second train on the other track of a double-track
+      train: {...}                      #  deck, in the same run (default: the case's train)
+      track_index: 1                    # default: the other track
+      direction: -1                     # default: opposite to the first (the trains meet)
+      speed_kmh: 300                    # default: the first train's speed
+      start_x_m: null                   # its leading wheelset at t = 0 (default: as the
+                                        #  first's default for its direction)
+      irregularity: shared              # its track's profile: shared (the irregularity
+                                        #  section's, on this track's rails) or a section
     monitors: [...]                     # structure monitors (default: the structure's default)
 
 In memory, :func:`prepare` also takes the track input (``track``: an Irregularity, or a profile
-table with chainage_m and the four channels in mm) and the property factors (``factors``:
-{parameter: array over the carriers}) instead of files.
+table with chainage_m and the four channels in mm; ``second_track`` for the second train's
+track) and the property factors (``factors``: {parameter: array over the carriers}) instead
+of files.
+
+Placement: a train on track k runs on rails 2k (left) and 2k + 1 (right); a train running -x
+has its own axes turned by 180 degrees about z (its left wheel on the track's right rail,
+lateral signs flipped: ttbpipe.simulation.loop.placed_track_kinematics); its wheelset
+positions in the loop are taken along its direction of travel (x = -s). The run's length and
+time step are the first train's; the second must stay on the rails for all of it. Each train
+is a setup of its own (:class:`CoupledSetup`, the second in ``setup.second``) sharing the
+structure, the step and the static state.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -44,8 +67,7 @@ import numpy as np
 import pandas as pd
 
 from ..irregularity.track_input import Irregularity, build_irregularity
-from ..structure.rail_mesh import (RailMesh, add_rail_contact_load, add_rail_head_load, no_rails,
-                                   rail_inverse_masses, rail_mesh)
+from ..structure.rail_mesh import RailMesh, no_rails, rail_inverse_masses, rail_mesh
 from ..structure.static import StructureStatic
 from ..timestepping.limits import (contact_time_step_limit, coupled_time_step_limit,
                                    resolve_time_step)
@@ -56,7 +78,7 @@ from ..vehicle.model import TrainModel, build_train_model
 from ..vehicle.parameters import TrainParameters, train_from_config
 from ..vehicle.curving import curve_arrays
 from ..vehicle.static import solve_vehicle_static
-from .loop import track_kinematics
+from .loop import add_wheel_loads, placed_track_kinematics
 
 log = logging.getLogger(__name__)
 
@@ -99,54 +121,94 @@ class CoupledSetup:
     irregularity_info: dict = field(default_factory=dict)   # diagnosis.irregularity_indicators
     irregularity_config: dict = field(default_factory=dict)  # the case's irregularity section
     propose_auto: bool = False  # messages may offer time_step_s: auto (prepare)
+    track_index: int = 0       # the train's track (rails 2k, 2k + 1)
+    direction: int = 1         # 1: runs +x, -1: runs -x (its axes turned about z)
+    second: Any = None         # the second train's CoupledSetup in a two-train run
+    label: str = ""            # its columns' and indices' prefix ("train2_"; "" for the first)
 
     @property
     def n_spans(self) -> int:
         return 0 if self.structure is None else len(self.structure.spans)
 
+    @property
+    def velocity(self) -> float:
+        """The train's velocity along x (m/s; negative running -x)."""
+        return self.direction * self.speed
 
-def _rail_kin_at(mesh, disp, ws_x, irr: Irregularity) -> np.ndarray:
-    rail_kin = np.zeros((ws_x.size, 2, RAIL_KIN_COLS))
-    track_kinematics(mesh, irr, disp, np.zeros_like(disp), ws_x, 0.0, rail_kin)
+    @property
+    def wheelset_x0(self) -> np.ndarray:
+        """x (m) of every wheelset at t = 0, in the model's order."""
+        return self.x_lead0 + self.direction * self.model.wheelset_x
+
+
+@dataclass
+class StaticTrain:
+    """A train in the static solve: its model, contact, speed, track input, wheelset positions
+    along its direction of travel (``ws_s``; x = direction s) and placement (left rail of its
+    track, direction), and the curve terms (None: tangent track)."""
+
+    model: Any
+    geom: Any
+    speed: float
+    irregularity: Irregularity
+    ws_s: np.ndarray
+    rail0: int = 0
+    direction: int = 1
+    curve: Any = None
+
+
+def _rail_kin_at(mesh, disp, train: StaticTrain) -> np.ndarray:
+    rail_kin = np.zeros((train.ws_s.size, 2, RAIL_KIN_COLS))
+    placed_track_kinematics(mesh, train.irregularity, disp, np.zeros_like(disp), train.ws_s,
+                            0.0, rail_kin, train.rail0, train.direction)
     return rail_kin
 
 
-def static_equilibrium(model, geom, speed, mesh, structure_static, irr, ws_x,
-                       tol_load: float = 1e-3, max_iter: int = 30, curve=None):
-    """Train + structure static state: fixed point between the vehicle Newton solve and the
-    structure's linear static solve (the rails are ~100x stiffer than the primary suspension, so
-    it converges in a few iterations; it stops when the wheel loads change by less than
-    ``tol_load`` N). Returns (q, v, disp, wheel, iterations); v is zero except the wheelsets'
-    steady spin rates. ``curve``: the track layout's terms (ttbpipe.vehicle.curving), the
-    steady state on the curve at the train's start."""
+def _vehicle_static(mesh, disp, train: StaticTrain):
+    rail_kin = _rail_kin_at(mesh, disp, train)
+    return solve_vehicle_static(train.model, train.geom, train.speed, rail_kin,
+                                curve=train.curve, x_lead=float(train.ws_s[0]))
+
+
+def static_equilibrium_trains(trains: list[StaticTrain], mesh, structure_static,
+                              tol_load: float = 1e-3, max_iter: int = 30):
+    """Trains + structure static state: fixed point between each train's vehicle Newton solve
+    and the structure's linear static solve under all their wheel loads (the rails are ~100x
+    stiffer than the primary suspension, so it converges in a few iterations; it stops when no
+    wheel load changes by more than ``tol_load`` N). Returns ([(q, wheel, v) per train], disp,
+    iterations); v is zero except the wheelsets' steady spin rates."""
     n_s = 0 if structure_static is None else int(structure_static.n)
     disp = np.zeros(n_s)
     prev = None
     for it in range(1, max_iter + 1):
-        rail_kin = _rail_kin_at(mesh, disp, ws_x, irr)
-        q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin, curve=curve,
-                                           x_lead=float(ws_x[0]))
+        states = [_vehicle_static(mesh, disp, tr) for tr in trains]
         if structure_static is None:
-            return q, v, disp, wheel, it
+            return states, disp, it
         force = np.zeros(n_s)
-        for w in range(ws_x.size):
-            for k in range(2):
-                if geom.zones is not None:       # as the loop (ttbpipe.simulation.loop)
-                    add_rail_contact_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
-                                          -wheel[w, k, 7], force)
-                else:
-                    add_rail_head_load(mesh, k, ws_x[w], -wheel[w, k, 2], -wheel[w, k, 1],
-                                       force)
+        for tr, (_, wheel, _) in zip(trains, states):
+            # as the loop (ttbpipe.simulation.loop)
+            add_wheel_loads(mesh, wheel, tr.ws_s, tr.rail0, tr.direction,
+                            tr.geom.zones is not None, force)
         disp = structure_static.solve(force)
-        loads = wheel[:, :, 2]
+        loads = np.concatenate([wheel[:, :, 2].ravel() for _, wheel, _ in states])
         if prev is not None and np.max(np.abs(loads - prev)) < tol_load:
-            rail_kin = _rail_kin_at(mesh, disp, ws_x, irr)
-            q, wheel, v = solve_vehicle_static(model, geom, speed, rail_kin, curve=curve,
-                                           x_lead=float(ws_x[0]))
-            return q, v, disp, wheel, it
+            return [_vehicle_static(mesh, disp, tr) for tr in trains], disp, it
         prev = loads
     raise RuntimeError(f"train-structure static equilibrium did not converge in {max_iter} "
                        "iterations; check the structure supports and the suspension stiffness")
+
+
+def static_equilibrium(model, geom, speed, mesh, structure_static, irr, ws_x,
+                       tol_load: float = 1e-3, max_iter: int = 30, curve=None):
+    """Train + structure static state of one train on rails 0, 1 running +x
+    (:func:`static_equilibrium_trains`). Returns (q, v, disp, wheel, iterations). ``curve``:
+    the track layout's terms (ttbpipe.vehicle.curving), the steady state on the curve at the
+    train's start."""
+    states, disp, it = static_equilibrium_trains(
+        [StaticTrain(model, geom, speed, irr, np.asarray(ws_x, float), curve=curve)], mesh,
+        structure_static, tol_load, max_iter)
+    q, wheel, v = states[0]
+    return q, v, disp, wheel, it
 
 
 def rigid_packed():
@@ -177,9 +239,79 @@ def _structure(case: Mapping[str, Any], factors: Mapping[str, np.ndarray] | None
     return structure
 
 
+def _run_span(sim: Mapping[str, Any], structure, train_len: float, margin: float,
+              direction: int, where: str = "simulation") -> tuple[float, float]:
+    """(leading wheelset at t = 0, at the end) of a train on the structure's rails: the
+    section's ``start_x_m`` / ``end_x_m``, by default the whole train inside the rails
+    ``margin`` from the end it enters at and the leading wheelset ``margin`` before the other."""
+    x_min, x_max = structure.rail_x_range
+    start, end = sim.get("start_x_m"), sim.get("end_x_m")
+    if direction > 0:
+        x_lead0 = float(start) if start is not None else x_min + margin + train_len
+        x_end = float(end) if end is not None else x_max - margin
+        outside = x_lead0 - train_len < x_min or x_end > x_max
+    else:
+        x_lead0 = float(start) if start is not None else x_max - margin - train_len
+        x_end = float(end) if end is not None else x_min + margin
+        outside = x_lead0 + train_len > x_max or x_end < x_min
+    if outside:
+        raise ValueError(
+            f"the train ({train_len:.1f} m between end wheelsets) must stay on the modelled rails "
+            f"[{x_min:.1f}, {x_max:.1f}] m but runs with its leading wheelset from {x_lead0:.1f} "
+            f"to {x_end:.1f} m; lengthen the structure's approaches or set {where}.start_x_m/end_x_m")
+    return x_lead0, x_end
+
+
+def _placement(sim: Mapping[str, Any], where: str, default_track: int = 0,
+               default_direction: int = 1) -> tuple[int, int]:
+    track_index = int(sim.get("track_index", default_track))
+    direction = int(sim.get("direction", default_direction))
+    if direction not in (1, -1):
+        raise ValueError(f"{where}.direction: {direction}; expected 1 (+x) or -1 (-x)")
+    return track_index, direction
+
+
+def _wheel_range(x_lead0: float, x_end: float, train_len: float, direction: int,
+                 reach: float) -> tuple[float, float]:
+    """Chainage range the wheels of a train cover in a run (``reach``: the distance past the
+    end the output rows reach), 1 m margins."""
+    if direction > 0:
+        return x_lead0 - train_len - 1.0, x_end + reach + 1.0
+    return x_end - reach - 1.0, x_lead0 + train_len + 1.0
+
+
+def _time_step(sim, model, geom, speed, structure, mesh, packed, propose_auto):
+    """(dt, limits) of one train on the structure (every stability limit, resolve_time_step)."""
+    limits = contact_time_step_limit(model, geom, speed,
+                                     *rail_inverse_masses(mesh, packed.inv_mass))
+    lateral_creep = sim.get("lateral_creep", "semi_implicit")
+    if lateral_creep not in ("semi_implicit", "explicit"):
+        raise ValueError(f"simulation.lateral_creep: {lateral_creep!r}; expected semi_implicit | "
+                         "explicit")
+    limits["lateral_creep"] = lateral_creep
+    if lateral_creep == "semi_implicit":
+        # the lateral creep damper is integrated semi-implicitly (unconditionally stable;
+        # docs/performance.md): only the Hertz and spin limits bound the step
+        limits["dt_s"] = float(min(limits["dt_hertz_s"], limits["dt_creep_spin_s"]))
+    dt = resolve_time_step(sim, model, geom, speed, structure, limits, propose_auto=propose_auto)
+    return dt, limits
+
+
+def _warn_irregularity(irr_info: dict, speed: float, label: str = "") -> None:
+    from .diagnosis import PLAUSIBLE_D1_PEAK_MM
+    if (irr_info["contact_demand_ratio"] > 1.0 or max(irr_info["peak_vertical_d1_mm"],
+                                                      irr_info["peak_lateral_d1_mm"]) > PLAUSIBLE_D1_PEAK_MM):
+        log.warning("%sirregularity: peak %.1f mm vertical, %.1f mm lateral in 3-25 m (plausible at "
+                    "most %.0f mm); its curvature asks for %.1f times the wheel acceleration "
+                    "contact can give at %.0f km/h: expect loss of wheel-rail contact", label,
+                    irr_info["peak_vertical_d1_mm"], irr_info["peak_lateral_d1_mm"],
+                    PLAUSIBLE_D1_PEAK_MM, irr_info["contact_demand_ratio"], speed * 3.6)
+
+
 def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | None = None,
             factors: Mapping[str, np.ndarray] | None = None,
-            propose_auto: bool = False) -> CoupledSetup:
+            propose_auto: bool = False,
+            second_track: Irregularity | pd.DataFrame | None = None) -> CoupledSetup:
     """Build the train, contact, structure, track input and the static state of a case.
 
     ``track``: the track input in memory (an :class:`Irregularity`, used as it is, or a profile
@@ -189,6 +321,8 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
     concrete step (``ttbpipe simulate``, one case). Off by default: in a study every sample must
     use the same step (one time grid), so ``auto``, which takes each sample's own limit, is
     not a remedy there. ``auto`` itself is accepted either way (ttbpipe.timestepping.limits).
+    ``second_track``: the track input of the second train's track (``second_train``; default:
+    from its ``irregularity`` entry, ``shared``: ``track`` again).
     """
     case = dict(case or {})
     sim = dict(case.get("simulation") or {})
@@ -205,7 +339,17 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
     track_kind = sim.get("track", "structure")
     margin = float(sim.get("margin_m", 5.0))
     train_len = -float(model.wheelset_x.min())
+    track_index, direction = _placement(sim, "simulation")
+    second_cfg = case.get("second_train")
+    curve = curve_arrays(model, sim.get("layout"))
+    if (direction != 1 or second_cfg is not None) and curve.scal[0] > 0.0:
+        raise ValueError("simulation.layout: curves are modelled for one train running +x; a "
+                         "train running -x (simulation.direction: -1) or a second train needs "
+                         "tangent track")
     if track_kind == "rigid":
+        if track_index != 0 or direction != 1 or second_cfg is not None:
+            raise ValueError("simulation.track: rigid has one track run +x by one train; "
+                             "track_index, direction and second_train need the structure")
         structure, packed = None, rigid_packed()
         mesh = no_rails(train.contact.rail_head_height)
         x_lead0 = float(sim.get("start_x_m") or 0.0)
@@ -215,80 +359,150 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
         from ..structure.monitors import compile_monitors, default_monitors
 
         structure = _structure(case, factors)
+        if not 0 <= track_index < structure.n_tracks:
+            raise ValueError(f"simulation.track_index: {track_index}; the structure has "
+                             f"{structure.n_tracks} track(s) (structure.layout.tracks), 0-based")
         packed = structure.packed
         mesh = rail_mesh(packed, structure.rail_head_height_m)
-        x_min, x_max = structure.rail_x_range
-        x_lead0 = float(sim["start_x_m"]) if sim.get("start_x_m") is not None else x_min + margin + train_len
-        x_end = float(sim["end_x_m"]) if sim.get("end_x_m") is not None else x_max - margin
-        if x_lead0 - train_len < x_min or x_end > x_max:
-            raise ValueError(
-                f"the train ({train_len:.1f} m between end wheelsets) must stay on the modelled rails "
-                f"[{x_min:.1f}, {x_max:.1f}] m but runs with its leading wheelset from {x_lead0:.1f} "
-                f"to {x_end:.1f} m; lengthen the structure's approaches or set simulation.start_x_m/end_x_m")
+        x_lead0, x_end = _run_span(sim, structure, train_len, margin, direction)
         monitors = compile_monitors(structure, case.get("monitors") or default_monitors(structure))
     else:
         raise ValueError(f"simulation.track: {track_kind!r}; expected structure | rigid")
     if geom.zones is not None:
         # two-point contact: the vertical loads' lever about the rail's shear centre uses the
         # structure's head height, as the lateral force's (ttbpipe.structure.rail_mesh)
-        import dataclasses
-
         geom = dataclasses.replace(geom, rail_head_height=float(mesh.head_height))
     if sim.get("duration_s") is not None:
-        x_end = x_lead0 + speed * float(sim["duration_s"])
-        if structure is not None and x_end > structure.rail_x_range[1]:
+        x_end = x_lead0 + direction * speed * float(sim["duration_s"])
+        if structure is not None and not (structure.rail_x_range[0] <= x_end
+                                          <= structure.rail_x_range[1]):
             raise ValueError(f"simulation.duration_s={sim['duration_s']} s takes the leading wheelset "
                              f"to x = {x_end:.1f} m, beyond the rails; shorten it")
-    if x_end <= x_lead0:
-        raise ValueError(f"simulation: end_x_m {x_end} must exceed start_x_m {x_lead0}")
-    limits = contact_time_step_limit(model, geom, speed, *rail_inverse_masses(mesh, packed.inv_mass))
-    lateral_creep = sim.get("lateral_creep", "semi_implicit")
-    if lateral_creep not in ("semi_implicit", "explicit"):
-        raise ValueError(f"simulation.lateral_creep: {lateral_creep!r}; expected semi_implicit | "
-                         "explicit")
-    limits["lateral_creep"] = lateral_creep
-    if lateral_creep == "semi_implicit":
-        # the lateral creep damper is integrated semi-implicitly (unconditionally stable;
-        # docs/performance.md): only the Hertz and spin limits bound the step
-        limits["dt_s"] = float(min(limits["dt_hertz_s"], limits["dt_creep_spin_s"]))
-    dt = resolve_time_step(sim, model, geom, speed, structure, limits, propose_auto=propose_auto)
+    if direction * (x_end - x_lead0) <= 0:
+        raise ValueError(f"simulation: end_x_m {x_end} must be beyond start_x_m {x_lead0} in "
+                         "the direction of travel")
+    dt, limits = _time_step(sim, model, geom, speed, structure, mesh, packed, propose_auto)
+    second = None
+    if second_cfg is not None:
+        second = _second_train(case, dict(second_cfg), structure, train_cfg, speed, track_index,
+                               direction, margin)
+        second["geom"] = dataclasses.replace(second["geom"], rail_head_height=float(
+            mesh.head_height)) if second["geom"].zones is not None else second["geom"]
+        dt2, second["limits"] = _time_step(sim, second["model"], second["geom"],
+                                           second["speed"], structure, mesh, packed,
+                                           propose_auto)
+        dt = min(dt, dt2)
     if sim.get("output_every") is not None:
         out_every = int(sim["output_every"])
     else:
         out_every = max(1, int(round(float(sim.get("output_interval_s", 1.0e-3)) / dt)))
-    duration = (x_end - x_lead0) / speed
+    duration = direction * (x_end - x_lead0) / speed
     n_steps = int(np.ceil(duration / dt / out_every)) * out_every
+    irr_cfg = case.get("irregularity")
+    lo, hi = _wheel_range(x_lead0, x_end, train_len, direction, speed * dt * out_every)
+    if second is not None:
+        second["x_end"] = second["x_lead0"] + second["direction"] * second["speed"] * n_steps * dt
+        _check_on_rails(second, structure)
+        lo2, hi2 = _wheel_range(second["x_lead0"], second["x_end"], second["train_len"],
+                                second["direction"], second["speed"] * dt * out_every)
+        lo, hi = min(lo, lo2), max(hi, hi2)
     if isinstance(track, Irregularity):
         irr = track
     else:
-        irr = build_irregularity(case.get("irregularity"), x_lead0 - train_len - 1.0,
-                                 x_end + speed * dt * out_every + 1.0, x_lead0, profile=track)
-    ws_x = x_lead0 + model.wheelset_x
+        irr = build_irregularity(irr_cfg, lo, hi, x_lead0, profile=track, direction=direction)
+    trains = [StaticTrain(model, geom, speed, irr, direction * x_lead0 + model.wheelset_x,
+                          2 * track_index, direction, curve)]
+    if second is not None:
+        shared = second["irregularity"] == "shared"
+        source = track if second_track is None and shared else second_track
+        if isinstance(source, Irregularity):
+            second["irr"] = source
+        else:
+            second["irr"] = build_irregularity(irr_cfg if shared else second["irregularity"],
+                                               lo, hi, second["x_lead0"], profile=source,
+                                               direction=second["direction"])
+        trains.append(StaticTrain(second["model"], second["geom"], second["speed"],
+                                  second["irr"], second["direction"] * second["x_lead0"]
+                                  + second["model"].wheelset_x, 2 * second["track_index"],
+                                  second["direction"]))
     sstatic = StructureStatic(structure) if structure is not None else None
-    curve = curve_arrays(model, sim.get("layout"))
-    q0, v0, disp0, wheel0, iters = static_equilibrium(model, geom, speed, mesh, sstatic, irr, ws_x,
-                                                      curve=curve)
-    f_const = model.gravity_force + model.coupler_stiffness @ q0
-    creep_relax = (limits["lateral_creep_inverse_mass_1_kg"] * dt / speed
-                   if lateral_creep == "semi_implicit" else 0.0)
-    from .diagnosis import PLAUSIBLE_D1_PEAK_MM, irregularity_indicators
-    irr_info = irregularity_indicators(irr, speed, model)
-    if (irr_info["contact_demand_ratio"] > 1.0 or max(irr_info["peak_vertical_d1_mm"],
-                                                      irr_info["peak_lateral_d1_mm"]) > PLAUSIBLE_D1_PEAK_MM):
-        log.warning("irregularity: peak %.1f mm vertical, %.1f mm lateral in 3-25 m (plausible at "
-                    "most %.0f mm); its curvature asks for %.1f times the wheel acceleration "
-                    "contact can give at %.0f km/h: expect loss of wheel-rail contact",
-                    irr_info["peak_vertical_d1_mm"], irr_info["peak_lateral_d1_mm"],
-                    PLAUSIBLE_D1_PEAK_MM, irr_info["contact_demand_ratio"], speed * 3.6)
-    return CoupledSetup(train=train, model=model, geom=geom, speed=speed, dt=dt, n_steps=n_steps,
-                        out_every=out_every, x_lead0=x_lead0, irregularity=irr, structure=structure,
-                        packed=packed, mesh=mesh, monitors=monitors,
-                        vehicle=vehicle_arrays(model, geom, f_const, x_lead0, curve), q0=q0, v0=v0,
-                        disp0=disp0, static_wheel=wheel0, dt_limits=limits,
-                        static_iterations=iters, creep_relax=creep_relax,
-                        irregularity_info=irr_info,
-                        irregularity_config=dict(case.get("irregularity") or {}),
-                        propose_auto=propose_auto)
+    states, disp0, iters = static_equilibrium_trains(trains, mesh, sstatic)
+    common = dict(dt=dt, n_steps=n_steps, out_every=out_every, structure=structure,
+                  packed=packed, mesh=mesh, monitors=monitors, disp0=disp0,
+                  static_iterations=iters, propose_auto=propose_auto)
+
+    def train_setup(tr, state, train_params, limits, x0, track_i, irr_config, label):
+        from .diagnosis import irregularity_indicators
+
+        q0, wheel0, v0 = state
+        f_const = tr.model.gravity_force + tr.model.coupler_stiffness @ q0
+        creep_relax = (limits["lateral_creep_inverse_mass_1_kg"] * dt / tr.speed
+                       if limits["lateral_creep"] == "semi_implicit" else 0.0)
+        irr_info = irregularity_indicators(tr.irregularity, tr.speed, tr.model)
+        _warn_irregularity(irr_info, tr.speed, label)
+        return CoupledSetup(
+            train=train_params, model=tr.model, geom=tr.geom, speed=tr.speed, x_lead0=x0,
+            irregularity=tr.irregularity,
+            vehicle=vehicle_arrays(tr.model, tr.geom, f_const, tr.direction * x0, tr.curve),
+            q0=q0, v0=v0, static_wheel=wheel0, dt_limits=limits, creep_relax=creep_relax,
+            irregularity_info=irr_info, irregularity_config=dict(irr_config or {}),
+            track_index=track_i, direction=tr.direction, label=label, **common)
+
+    setup = train_setup(trains[0], states[0], train, limits, x_lead0, track_index, irr_cfg, "")
+    if second is not None:
+        irr2 = irr_cfg if second["irregularity"] == "shared" else second["irregularity"]
+        setup.second = train_setup(trains[1], states[1], second["train"], second["limits"],
+                                   second["x_lead0"], second["track_index"], irr2, "train2_")
+        setup.second.monitors = None          # the structure's monitors are the first's
+    return setup
+
+
+def _second_train(case, cfg: dict, structure, train_cfg: dict, speed: float, track_index: int,
+                  direction: int, margin: float) -> dict:
+    """The ``second_train`` section resolved: its train, model, contact, speed, placement and
+    start (its end follows from the run's duration, :func:`prepare`)."""
+    where = "second_train"
+    if structure is None or structure.n_tracks < 2:
+        raise ValueError(f"{where}: a second train needs a double-track deck "
+                         "(structure.layout.tracks: 2)")
+    unknown = sorted(set(cfg) - {"train", "track_index", "direction", "speed_kmh", "start_x_m",
+                                  "irregularity"})
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {unknown}")
+    t_index, t_dir = _placement(cfg, where, default_track=1 - track_index,
+                                default_direction=-direction)
+    if not 0 <= t_index < structure.n_tracks or t_index == track_index:
+        raise ValueError(f"{where}.track_index: {t_index}; it runs on the other track "
+                         f"({1 - track_index}) of the double-track deck")
+    tcfg = dict(cfg.get("train") or train_cfg)
+    v_kmh = cfg.get("speed_kmh", speed * 3.6)
+    if not float(v_kmh) > 0:
+        raise ValueError(f"{where}.speed_kmh must be positive, got {v_kmh}")
+    params = train_from_config(tcfg)
+    model = build_train_model(params)
+    train_len = -float(model.wheelset_x.min())
+    x_lead0, _ = _run_span({"start_x_m": cfg.get("start_x_m")}, structure, train_len, margin,
+                           t_dir, where)
+    irregularity = cfg.get("irregularity", "shared")
+    if not (irregularity == "shared" or isinstance(irregularity, Mapping)):
+        raise ValueError(f"{where}.irregularity: shared or an irregularity section, got "
+                         f"{irregularity!r}")
+    return {"train": params, "model": model, "geom": build_geometry(params.contact),
+            "speed": float(v_kmh) / 3.6, "track_index": t_index, "direction": t_dir,
+            "x_lead0": x_lead0, "train_len": train_len, "irregularity": irregularity}
+
+
+def _check_on_rails(second: dict, structure) -> None:
+    x_min, x_max = structure.rail_x_range
+    x0, x1, d, length = (second["x_lead0"], second["x_end"], second["direction"],
+                         second["train_len"])
+    rear0 = x0 - d * length
+    if not all(x_min <= x <= x_max for x in (x0, x1, rear0)):
+        raise ValueError(f"second_train: its leading wheelset runs from {x0:.1f} to {x1:.1f} m "
+                         f"during the run, its rear starts at {rear0:.1f} m, but the rails are "
+                         f"[{x_min:.1f}, {x_max:.1f}] m; move second_train.start_x_m, lower its "
+                         "speed or lengthen the approaches")
+
 
 
 def diagnosis_limits(setup: CoupledSetup) -> dict:
