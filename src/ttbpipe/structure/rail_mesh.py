@@ -30,8 +30,9 @@ from numba import njit
 
 from .shape_functions import hermite
 
-#: n_rails (0 or 2), first node x0 (m), spacing dx (m), nodes per rail, first DOF of each rail's
-#: node 0 (int64 array of 2), rail head height above the shear centre (m).
+#: n_rails (0, 2, or 4 on a double-track deck: track k has rails 2k, 2k + 1), first node x0 (m),
+#: spacing dx (m), nodes per rail, first DOF of each rail's node 0 (int64 array of n_rails, at
+#: least 2), rail head height above the shear centre (m).
 RailMesh = namedtuple("RailMesh", ["n_rails", "x0", "dx", "n_nodes", "dof0", "head_height"])
 
 #: DOFs per rail node and the offsets of its lateral displacement and roll.
