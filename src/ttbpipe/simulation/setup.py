@@ -384,7 +384,7 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
     dt, limits = _time_step(sim, model, geom, speed, structure, mesh, packed, propose_auto)
     second = None
     if second_cfg is not None:
-        second = _second_train(case, dict(second_cfg), structure, train_cfg, speed, track_index,
+        second = _second_train(dict(second_cfg), structure, train_cfg, speed, track_index,
                                direction, margin)
         second["geom"] = dataclasses.replace(second["geom"], rail_head_height=float(
             mesh.head_height)) if second["geom"].zones is not None else second["geom"]
@@ -457,7 +457,7 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
     return setup
 
 
-def _second_train(case, cfg: dict, structure, train_cfg: dict, speed: float, track_index: int,
+def _second_train(cfg: dict, structure, train_cfg: dict, speed: float, track_index: int,
                   direction: int, margin: float) -> dict:
     """The ``second_train`` section resolved: its train, model, contact, speed, placement and
     start (its end follows from the run's duration, :func:`prepare`)."""
