@@ -39,7 +39,7 @@ import numpy as np
 import pytest
 
 from ttbpipe.irregularity.track_input import Irregularity
-from ttbpipe.simulation.coupled import integrate, prepare, run_coupled
+from ttbpipe.simulation.coupled import prepare, run_coupled
 from ttbpipe.structure import build_structure
 from ttbpipe.structure.modal import modal_analysis
 
