@@ -485,6 +485,26 @@ def _she_factor(creep_x: float, creep_y: float, friction: float, normal: float) 
 
 
 @njit(cache=True)
+def _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0, mu,
+                        speed, ws_vyaw, ws_vpitch):
+    """Creep forces (F_x, F_y in the contact plane, spin moment M_z) of one contact point with
+    normal force ``normal`` > 0, rolling radius ``radius`` at lateral distance ``a`` from the
+    wheelset centre, contact angle delta (cos, sin) and the lateral creepage ``xi_y`` (after the
+    semi-implicit relaxation, if any): the longitudinal and spin creepages
+    xi_x = -(r - r0)/r0 - s a yaw'/V - r pitch'/V, xi_sp = yaw' cos(delta)/V - s sin(delta)/r0,
+    Kalker's linear law F_x = -f11 xi_x, F_y = -f22 xi_y - f23 xi_sp, M_z = f23 xi_y - f33 xi_sp,
+    scaled by Shen-Hedrick-Elkins (:func:`_she_factor`). The one formula of the one-point and the
+    two-point kernels (module docstring for the sources)."""
+    xi_x = -(radius - r0) / r0 - side * a * ws_vyaw / speed - radius * ws_vpitch / speed
+    xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
+    tx = -f11 * xi_x
+    ty = -f22 * xi_y - f23 * xi_sp
+    tm = f23 * xi_y - f33 * xi_sp
+    k = _she_factor(tx, ty, mu, normal)
+    return k * tx, k * ty, k * tm
+
+
+@njit(cache=True)
 def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
     """Linear interpolation of all table columns at y_rel (uniform grid; linear extrapolation
     of r and dz beyond the ends, other columns held)."""
@@ -557,19 +577,12 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
         f22 = g_shear * ab * row[8]
         f23 = g_shear * ab ** 1.5 * row[9]
         f33 = g_shear * ab * ab * row[10]
-        xi_x = -(radius - r0) / r0 - side * a0 * ws_vyaw / speed - radius * ws_vpitch / speed
         if creep_relax > 0.0:
             g = f22 * creep_relax
             xi_y = (xi_y + g * creep_y_prev) / (1.0 + g)
             xi_y_state = xi_y
-        xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
-        tx = -f11 * xi_x
-        ty = -f22 * xi_y - f23 * xi_sp
-        tm = f23 * xi_y - f33 * xi_sp
-        k = _she_factor(tx, ty, mu, normal)
-        fx = k * tx
-        fy = k * ty
-        mz = k * tm
+        fx, fy, mz = _point_creep_forces(side, normal, radius, a0, cos_d, sin_d, xi_y,
+                                         f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
     force_y = -side * normal * sin_d + fy * cos_d
     force_z = normal * cos_d + side * fy * sin_d
     # flange: stiff lateral spring beyond the clearance (left flange touches when y_rel > gap)
@@ -707,15 +720,8 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         if creep_relax > 0.0 and creep_prev[k] == creep_prev[k]:
             xi_y = (xi_y + g * creep_prev[k]) / (1.0 + g)
         creep_prev[k] = xi_y
-        xi_x = -(radius - r0) / r0 - side * a * ws_vyaw / speed - radius * ws_vpitch / speed
-        xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
-        tx = -f11 * xi_x
-        ty = -f22 * xi_y - f23 * xi_sp
-        tm = f23 * xi_y - f33 * xi_sp
-        kf = _she_factor(tx, ty, mu, normal)
-        fx = kf * tx
-        fy = kf * ty
-        mz = kf * tm
+        fx, fy, mz = _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y,
+                                         f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
         force_y = -side * normal * sin_d + fy * cos_d
         force_z = normal * cos_d + side * fy * sin_d
         fx_sum += fx
