@@ -21,12 +21,16 @@ from ttbpipe.vehicle.contact import wheel_contact
 from ttbpipe.vehicle.curving import CANT_BASE_M, curve_arrays, frame_at, layout_knots
 
 
-def _one_car_on_a_curve(speed_kmh, radius_m, cant_mm, length_m=400.0, transition_m=None):
+def _one_car_on_a_curve(speed_kmh, radius_m, cant_mm, length_m=400.0, transition_m=None,
+                        contact=None):
     # the whole run on the arc, or entering it from tangent track through a clothoid
     start, lt = (-1000.0, 0.0) if transition_m is None else (40.0, transition_m)
     curve = {"start_x_m": start, "transition_m": lt, "length_m": 5000.0,
              "radius_m": radius_m, "cant_mm": cant_mm, "direction": "left"}
-    return {"train": {"composition": ["trailer"]},
+    train = {"composition": ["trailer"]}
+    if contact is not None:
+        train["contact"] = contact
+    return {"train": train,
             "simulation": {"track": "rigid", "speed_kmh": speed_kmh, "rigid_length_m": length_m,
                            "time_step_s": 1e-4, "layout": {"curves": [curve]}},
             "irregularity": {"source": "none"}}
@@ -47,18 +51,24 @@ def test_steady_curving_rails_carry_the_cant_deficiency_force(speed_kmh, cant_mm
     setup = prepare(_one_car_on_a_curve(speed_kmh, radius, cant_mm, transition_m=transition_m))
     run = integrate(setup)
     wheel = run.wheel
-    last = slice(int(0.8 * wheel.shape[0]), None)
-    lateral = wheel[last, :, :, 1].sum(axis=(1, 2)).mean()
-    mass = setup.model.mass[0::5].sum()
-    theta = np.arcsin(cant_mm / 1000.0 / CANT_BASE_M)
-    v = speed_kmh / 3.6
-    expected = mass * (v * v / radius * np.cos(theta) - STANDARD_GRAVITY * np.sin(theta))
+    lateral, expected = steady_lateral_force(setup, run, speed_kmh, radius, cant_mm)
     assert abs(lateral - expected) < 0.01 * abs(expected), (lateral, expected)
+    last = slice(int(0.8 * wheel.shape[0]), None)
     outer, inner = wheel[last, :, 1, 2].mean(), wheel[last, :, 0, 2].mean()
     if expected > 0:
         assert outer > inner
     else:
         assert inner > outer
+
+
+def steady_lateral_force(setup, run, speed_kmh, radius_m, cant_mm):
+    """(the rails' lateral force on all wheels, averaged over the last 20 % of the run; the cant
+    deficiency force m (V^2/R cos theta - g sin theta) of the train's total mass)."""
+    lateral = run.wheel[int(0.8 * run.wheel.shape[0]):, :, :, 1].sum(axis=(1, 2)).mean()
+    mass = setup.model.mass[0::5].sum()
+    theta = np.arcsin(cant_mm / 1000.0 / CANT_BASE_M)
+    v = speed_kmh / 3.6
+    return lateral, mass * (v * v / radius_m * np.cos(theta) - STANDARD_GRAVITY * np.sin(theta))
 
 
 def test_coned_wheelset_rolls_without_longitudinal_creep_at_the_pure_rolling_offset():

@@ -281,27 +281,18 @@ def test_steady_curving_on_two_point_contact():
     two-point band of the pair (4.4-5.6 mm: tread and flange root both within the static
     approach, test above; measured 5.4 mm) and its outer wheel's tread and flange root both
     carry load (evaluated at the run's last state)."""
-    from ttbpipe.constants import STANDARD_GRAVITY
+    from test_curving import _one_car_on_a_curve, steady_lateral_force
+
     from ttbpipe.simulation.coupled import integrate, prepare
-    from ttbpipe.vehicle.curving import CANT_BASE_M
 
     radius, speed_kmh, cant_mm = 1000.0, 160.0, 60.0
-    curve = {"start_x_m": -1000.0, "transition_m": 0.0, "length_m": 5000.0,
-             "radius_m": radius, "cant_mm": cant_mm, "direction": "left"}
-    setup = prepare({"train": {"composition": ["trailer"], "contact": {"profile": "profiles"}},
-                     "simulation": {"track": "rigid", "speed_kmh": speed_kmh,
-                                    "rigid_length_m": 200.0, "time_step_s": 1e-4,
-                                    "layout": {"curves": [curve]}},
-                     "irregularity": {"source": "none"}})
+    setup = prepare(_one_car_on_a_curve(speed_kmh, radius, cant_mm, length_m=200.0,
+                                        contact={"profile": "profiles"}))
     run = integrate(setup)
     wheel = run.wheel
-    last = slice(int(0.8 * wheel.shape[0]), None)
-    lateral = wheel[last, :, :, 1].sum(axis=(1, 2)).mean()
-    mass = setup.model.mass[0::5].sum()
-    theta = np.arcsin(cant_mm / 1000.0 / CANT_BASE_M)
-    v = speed_kmh / 3.6
-    expected = mass * (v * v / radius * np.cos(theta) - STANDARD_GRAVITY * np.sin(theta))
+    lateral, expected = steady_lateral_force(setup, run, speed_kmh, radius, cant_mm)
     assert lateral == pytest.approx(expected, rel=0.01)
+    v = speed_kmh / 3.6
     y_lead = -wheel[-1, 0, 1, 3]            # the outer (right) wheel's y_rel, towards its rail
     assert 4.4e-3 < y_lead < 5.6e-3
     m = setup.model

@@ -505,20 +505,25 @@ def _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f
 
 
 @njit(cache=True)
+def _grid_cell(y0: float, y1: float, n: int, y: float):
+    """(i, w) of y on the uniform grid y0, y1, ... of n points: the cell [i, i + 1] and the
+    weight w of point i + 1 (w < 0 before the first point, w > 1 after the last: linear
+    extrapolation from the end cells)."""
+    s = (y - y0) / (y1 - y0)
+    if s < 0.0:
+        return 0, s
+    if s >= n - 1:
+        return n - 2, s - (n - 2)
+    i = int(s)
+    return i, s - i
+
+
+@njit(cache=True)
 def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
     """Linear interpolation of all table columns at y_rel (uniform grid; linear extrapolation
     of r and dz beyond the ends, other columns held)."""
     n = table.shape[0]
-    y0 = table[0, 0]
-    dy = table[1, 0] - y0
-    s = (y_rel - y0) / dy
-    if s < 0.0:
-        i, w = 0, s
-    elif s >= n - 1:
-        i, w = n - 2, s - (n - 2)
-    else:
-        i = int(s)
-        w = s - i
+    i, w = _grid_cell(table[0, 0], table[1, 0], n, y_rel)
     for c in range(table.shape[1]):
         out[c] = table[i, c] * (1.0 - w) + table[i + 1, c] * w
     if w < 0.0 or w > 1.0:  # hold the non-geometric columns at the end values
@@ -645,15 +650,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     y_rel = ws_y - rail_y
     n_z = zones.shape[0]
     n = zones.shape[1]
-    y0 = zones[0, 0, 0]
-    s = (side * y_rel - y0) / (zones[0, 1, 0] - y0)
-    if s < 0.0:
-        i, w = 0, s
-    elif s >= n - 1:
-        i, w = n - 2, s - (n - 2)
-    else:
-        i = int(s)
-        w = s - i
+    i, w = _grid_cell(zones[0, 0, 0], zones[0, 1, 0], n, side * y_rel)
     # r and dz extrapolate linearly beyond the table; the other columns hold their end values
     if w < 0.0:
         ih, wh = 0, 0.0
