@@ -101,7 +101,8 @@ def main(argv=None) -> int:
             print(f"MC {len(done)} runs, {time.time() - t0:.0f} s", flush=True)
         g.close()
         summary["mc_wall_s"] = time.time() - t0
-    mc = pd.read_parquet(mc_path)
+    # the Monte Carlo runs are needed for the limit (none given) and the tail model only
+    mc = pd.read_parquet(mc_path) if args.limit is None or args.stage in ("evt", "all") else None
     limit = args.limit if args.limit is not None else float(
         np.round(np.quantile(mc[args.index], args.mc_quantile), 3))
     summary["limit"] = limit
