@@ -214,3 +214,20 @@ def test_creep_law_option_selects_polach_in_both_contact_kernels():
                     assert pol[c] == pytest.approx(she[c], rel=2e-3, abs=1e-9 * LOAD), c
             if not close:
                 assert abs(pol[1]) < 0.97 * abs(she[1])
+
+
+def test_creep_law_configuration_is_checked():
+    """``train.contact``: an unknown creep law and Polach parameters outside Polach 2005's
+    ranges (0 < kS <= kA <= 1, 0 < A <= 1, B >= 0) are refused with the key's name; the
+    configuration schema lists the laws."""
+    from ttbpipe.configuration import CASE_SCHEMA, schema
+    from ttbpipe.vehicle.parameters import CREEP_LAWS, train_from_config
+
+    assert train_from_config({"contact": {"creep_law": "polach"}}).contact.creep_law == "polach"
+    for bad, key in (({"creep_law": "fastsim"}, "creep_law"),
+                     ({"creep_law": "polach", "polach_k_s": 0.9, "polach_k_a": 0.5}, "polach_k_a"),
+                     ({"polach_a": 0.0}, "polach_a"), ({"polach_b_s_m": -1.0}, "polach_b_s_m")):
+        with pytest.raises(ValueError, match=key):
+            train_from_config({"contact": bad})
+    props = schema(CASE_SCHEMA)["$defs"]["contact_parameters"]["properties"]
+    assert props["creep_law"]["enum"] == list(CREEP_LAWS)

@@ -348,16 +348,19 @@ def _geometry(table: np.ndarray, p: ContactParameters, tread: str, desc: str) ->
         shear_modulus=p.youngs_modulus / (2.0 * (1.0 + p.poisson)), youngs_modulus=p.youngs_modulus,
         poisson=p.poisson, friction=p.friction, wheel_radius=p.wheel_radius,
         contact_half_distance=p.contact_half_distance, flange_clearance=p.flange_clearance,
-        flange_stiffness=p.flange_stiffness, rail_head_height=p.rail_head_height, description=desc,
-        **_creep_law_fields(p))
+        flange_stiffness=p.flange_stiffness, rail_head_height=p.rail_head_height,
+        **_creep_law_fields(p, desc))
 
 
-def _creep_law_fields(p: ContactParameters) -> dict:
-    """The creep law of ``p`` as :class:`ContactGeometry` fields (checked)."""
+def _creep_law_fields(p: ContactParameters, description: str) -> dict:
+    """The creep law of ``p`` as :class:`ContactGeometry` fields (checked); a law other than the
+    default is named in the description (run summaries carry it)."""
     check_creep_law(p)
-    return {"creep_law": p.creep_law,
-            "polach": (float(p.polach_k_a), float(p.polach_k_s), float(p.polach_a),
-                       float(p.polach_b_s_m))}
+    polach = (float(p.polach_k_a), float(p.polach_k_s), float(p.polach_a), float(p.polach_b_s_m))
+    if p.creep_law != "kalker_she":
+        description += (f"; creep law {p.creep_law} (kA {polach[0]:g}, kS {polach[1]:g}, "
+                        f"A {polach[2]:g}, B {polach[3]:g} s/m)")
+    return {"creep_law": p.creep_law, "polach": polach, "description": description}
 
 
 def profiles_geometry(p: ContactParameters) -> ContactGeometry:
@@ -470,13 +473,13 @@ def build_geometry(p: ContactParameters) -> ContactGeometry:
             raise ValueError("train.contact.hertz_law: hertz needs contact_points: 2")
         import dataclasses
 
-        law = _creep_law_fields(p)
         shape = dataclasses.replace(p, **{f.name: f.default for f in dataclasses.fields(p)
                                           if f.name == "creep_law" or f.name.startswith("polach_")})
         key = repr(shape) + "".join(_file_stamp(name) for name in (p.wheel_profile, p.rail_profile))
         if key not in _PROFILE_GEOMETRIES:
             _PROFILE_GEOMETRIES[key] = zone_geometry(shape) if points == 2 else profiles_geometry(shape)
-        return dataclasses.replace(_PROFILE_GEOMETRIES[key], **law)
+        geom = _PROFILE_GEOMETRIES[key]
+        return dataclasses.replace(geom, **_creep_law_fields(p, geom.description))
     return table_geometry(p)
 
 
