@@ -2,11 +2,12 @@
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_reference_case.py [--case path.yaml] [--dt 1.25e-4]
         [--lateral-creep semi_implicit|explicit] [--contact profiles] [--contact-points 1|2]
+        [--creep-law kalker_she|polach]
 
 ``--contact profiles`` runs the case on S1002 / 60E1 (``train.contact: {profile: profiles}``,
 docs/contact_geometry.md; give ``--dt 1e-4``: the pair's Hertz contact lowers the coupled step
 limit); ``--contact-points`` selects one- or two-point contact on it (a tree without the
-option rejects the key).
+option rejects the key); ``--creep-law`` selects ``train.contact.creep_law`` (likewise).
 
 Prints the set-up time (structure, stability check, static equilibrium), the time loop's wall and
 CPU time, wall seconds per simulated second (target: at most 1 s on one core), the wall
@@ -49,12 +50,17 @@ def main() -> None:
                         help="train.contact.profile (default: the case's)")
     parser.add_argument("--contact-points", type=int, default=None, choices=[1, 2],
                         help="train.contact.contact_points (with --contact profiles)")
+    parser.add_argument("--creep-law", default=None, choices=["kalker_she", "polach"],
+                        help="train.contact.creep_law (default: the case's)")
     args = parser.parse_args()
     case = yaml.safe_load(Path(args.case).read_text())
     if args.contact:
         case.setdefault("train", {})["contact"] = {"profile": args.contact}
         if args.contact_points:
             case["train"]["contact"]["contact_points"] = args.contact_points
+    if args.creep_law:
+        contact = case.setdefault("train", {}).setdefault("contact", {})
+        contact["creep_law"] = args.creep_law
     sim = case.setdefault("simulation", {})
     if args.dt:
         sim["time_step_s"] = args.dt

@@ -217,3 +217,7 @@ def test_two_point_geometry_is_refused_with_the_remedy():
     geom = build_geometry(ContactParameters(profile="profiles"))
     with pytest.raises(ValueError, match="contact_points: 1"):
         _wheelset(geom, 50.0, k_y=1e6, k_yaw=1e6)
+    # and a creep law it does not linearise (creep_law: polach), naming the one it does
+    geom = build_geometry(ContactParameters(creep_law="polach"))
+    with pytest.raises(ValueError, match="creep_law: kalker_she"):
+        _wheelset(geom, 50.0, k_y=1e6, k_yaw=1e6)

@@ -65,8 +65,8 @@ def schema(name: str = STUDY_SCHEMA) -> dict:
     """A packaged schema; the case schema with the vehicle dataclasses' parameter names."""
     doc = _read_schema(name)
     if name == CASE_SCHEMA:
-        from .vehicle.parameters import (CONTACT_PROFILES, CarParameters, ContactParameters,
-                                         CouplerParameters)
+        from .vehicle.parameters import (CONTACT_PROFILES, CREEP_LAWS, CarParameters,
+                                         ContactParameters, CouplerParameters)
 
         car = {"type": "object", "additionalProperties": False,
                "properties": {k: v for k, v in _dataclass_properties(CarParameters).items()
@@ -77,6 +77,19 @@ def schema(name: str = STUDY_SCHEMA) -> dict:
                                       "properties": _dataclass_properties(CouplerParameters)}
         contact = _dataclass_properties(ContactParameters)
         contact["profile"] = {"type": "string", "enum": list(CONTACT_PROFILES)}
+        contact["creep_law"] = {
+            "type": "string", "enum": list(CREEP_LAWS),
+            "description": "creep law of every contact point (ttbpipe.vehicle.contact): "
+                           "kalker_she = Kalker linear + Shen-Hedrick-Elkins (default); polach = "
+                           "Polach 1999 (large spin) with the adhesion fall-off of Polach 2005"}
+        contact["polach_k_a"].update(exclusiveMinimum=0, maximum=1, description=(
+            "Polach 2005 reduction factor kA in the area of adhesion (1 = Kalker's slope)"))
+        contact["polach_k_s"].update(exclusiveMinimum=0, maximum=1, description=(
+            "Polach 2005 reduction factor kS in the area of slip, kS <= kA"))
+        contact["polach_a"].update(exclusiveMinimum=0, maximum=1, description=(
+            "Polach 2005 A = mu_inf / mu0, the friction at infinite slip velocity over friction"))
+        contact["polach_b_s_m"].update(minimum=0, description=(
+            "Polach 2005 B (s/m), the exponential decrease of the friction with the slip velocity"))
         defs["contact_parameters"] = {"type": "object", "additionalProperties": False,
                                       "properties": contact}
     return doc

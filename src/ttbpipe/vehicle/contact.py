@@ -19,6 +19,14 @@ Formulas and sources (physics.md section 4 unless stated):
   neighbours 1.14 and 1.36).
 * Shen-Hedrick-Elkins (1983) saturation: beta = |F| / (mu N); F' = mu N (beta - beta^2/3 +
   beta^3/27) for beta <= 3, else mu N; F_x, F_y and M_z are scaled by F'/|F|.
+  This is creep law ``kalker_she`` (``train.contact.creep_law``, the default).
+* Creep law ``polach``: O. Polach, "A fast wheel-rail forces calculation computer code", Vehicle
+  System Dynamics 33 Suppl. (1999) 728-739, with the adhesion fall-off of O. Polach, "Creep
+  forces in simulations of traction vehicles running on adhesion limit", Wear 258 (2005)
+  992-1000: the tangential force from Kalker's coefficients and the ellipse's semi-axes, large
+  spin through the equivalent creepage s_yC = xi_y + xi_sp a and Polach's lateral spin force,
+  mu = mu0 [(1 - A) exp(-B w) + A] with the slip velocity w (:func:`_polach_forces`); the spin
+  moment is Kalker's linear one scaled with the force (:func:`_polach_creep_forces`).
 * Flange contact: a stiff lateral spring beyond the flange clearance,
   F = -k_f (y_rel - delta_f) for y_rel > delta_f (Knudsen, Feldberg & True 1991, "Bifurcations
   and chaos in a model of a rolling railway wheelset", Phil. Trans. R. Soc. A 338: delta_f =
@@ -57,7 +65,7 @@ from numba import njit
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
-from .parameters import ContactParameters
+from .parameters import CREEP_LAWS, ContactParameters, check_creep_law
 
 log = logging.getLogger(__name__)
 
@@ -155,6 +163,8 @@ N_ZCOLS = 14
 #: yaw; N m) and the moment of its vertical forces about the rail's shear-centre line (N m,
 #: about x).
 N_POINT_OUT = 11
+#: Columns of the two-point kernel's per-point scratch ``pts`` (:func:`_wheel_contact_points`).
+N_PTS_COLS = 12
 #: Conformal contact: a lateral relative curvature B below this fraction of the rolling-direction
 #: curvature A (wheel hollow nearly as tight as the rail head, e.g. S1002's flange root on the
 #: gauge corner of 60E1) is held at it, where Hertz's half-space assumption fails anyway.
@@ -184,6 +194,8 @@ class ContactGeometry:
     flange_cut: float | None = None   # wheel profile coordinate of the tread/flange cut (m)
     rail_cant: float = 0.0            # sin of the rail inclination (two-point: the shear centre
     #                                   lies rail_head_height sin(beta) field-side of the crown)
+    creep_law: str = "kalker_she"     # CREEP_LAWS of ttbpipe.vehicle.parameters
+    polach: tuple = (1.0, 1.0, 1.0, 0.0)  # Polach's kA, kS, A = mu_inf/mu0, B (s/m)
 
     def zone_array(self) -> np.ndarray:
         """The zone tables for the kernels: (0, 2, N_ZCOLS) when there are none (one point)."""
@@ -200,12 +212,16 @@ class ContactGeometry:
         return np.array([self.hertz_g, self.shear_modulus, self.youngs_modulus, self.poisson,
                          self.friction, self.wheel_radius, self.contact_half_distance,
                          self.flange_clearance, self.flange_stiffness, self.rail_head_height,
-                         self.rail_cant])
+                         self.rail_cant, float(CREEP_LAWS.index(self.creep_law)), *self.polach])
 
 
 SCALAR_NAMES = ("hertz_g", "shear_modulus", "youngs_modulus", "poisson", "friction", "wheel_radius",
                 "contact_half_distance", "flange_clearance", "flange_stiffness", "rail_head_height",
-                "rail_cant")
+                "rail_cant", "creep_law", "polach_k_a", "polach_k_s", "polach_a", "polach_b_s_m")
+#: Index of the creep law's code in :meth:`ContactGeometry.scalars` (0 Kalker +
+#: Shen-Hedrick-Elkins, 1 Polach; :data:`ttbpipe.vehicle.parameters.CREEP_LAWS`), followed by
+#: Polach's kA, kS, A and B.
+SCAL_CREEP_LAW = 11
 
 
 def hertz_constant(curv_a: float, curv_b: float, youngs_modulus: float, poisson: float) -> float:
@@ -332,7 +348,19 @@ def _geometry(table: np.ndarray, p: ContactParameters, tread: str, desc: str) ->
         shear_modulus=p.youngs_modulus / (2.0 * (1.0 + p.poisson)), youngs_modulus=p.youngs_modulus,
         poisson=p.poisson, friction=p.friction, wheel_radius=p.wheel_radius,
         contact_half_distance=p.contact_half_distance, flange_clearance=p.flange_clearance,
-        flange_stiffness=p.flange_stiffness, rail_head_height=p.rail_head_height, description=desc)
+        flange_stiffness=p.flange_stiffness, rail_head_height=p.rail_head_height,
+        **_creep_law_fields(p, desc))
+
+
+def _creep_law_fields(p: ContactParameters, description: str) -> dict:
+    """The creep law of ``p`` as :class:`ContactGeometry` fields (checked); a law other than the
+    default is named in the description (run summaries carry it)."""
+    check_creep_law(p)
+    polach = (float(p.polach_k_a), float(p.polach_k_s), float(p.polach_a), float(p.polach_b_s_m))
+    if p.creep_law != "kalker_she":
+        description += (f"; creep law {p.creep_law} (kA {polach[0]:g}, kS {polach[1]:g}, "
+                        f"A {polach[2]:g}, B {polach[3]:g} s/m)")
+    return {"creep_law": p.creep_law, "polach": polach, "description": description}
 
 
 def profiles_geometry(p: ContactParameters) -> ContactGeometry:
@@ -431,8 +459,8 @@ def _file_stamp(name: str) -> str:
 
 def build_geometry(p: ContactParameters) -> ContactGeometry:
     """Contact geometry for the configured profile (conical, table or profiles; profiles with
-    ``contact_points`` 2 adds the tread and flange zone tables). A profile pair is built once
-    per process and parameter set."""
+    ``contact_points`` 2 adds the tread and flange zone tables) with the configured creep law.
+    A profile pair is built once per process and set of geometric parameters."""
     if p.hertz_law == "hertz" and p.profile != "profiles":
         raise ValueError("train.contact.hertz_law: hertz needs profile: profiles")
     if p.profile == "conical":
@@ -443,10 +471,15 @@ def build_geometry(p: ContactParameters) -> ContactGeometry:
             raise ValueError(f"train.contact.contact_points: {p.contact_points!r}; expected 1 or 2")
         if points == 1 and p.hertz_law == "hertz":
             raise ValueError("train.contact.hertz_law: hertz needs contact_points: 2")
-        key = repr(p) + "".join(_file_stamp(name) for name in (p.wheel_profile, p.rail_profile))
+        import dataclasses
+
+        shape = dataclasses.replace(p, **{f.name: f.default for f in dataclasses.fields(p)
+                                          if f.name == "creep_law" or f.name.startswith("polach_")})
+        key = repr(shape) + "".join(_file_stamp(name) for name in (p.wheel_profile, p.rail_profile))
         if key not in _PROFILE_GEOMETRIES:
-            _PROFILE_GEOMETRIES[key] = zone_geometry(p) if points == 2 else profiles_geometry(p)
-        return _PROFILE_GEOMETRIES[key]
+            _PROFILE_GEOMETRIES[key] = zone_geometry(shape) if points == 2 else profiles_geometry(shape)
+        geom = _PROFILE_GEOMETRIES[key]
+        return dataclasses.replace(geom, **_creep_law_fields(p, geom.description))
     return table_geometry(p)
 
 
@@ -485,23 +518,120 @@ def _she_factor(creep_x: float, creep_y: float, friction: float, normal: float) 
 
 
 @njit(cache=True)
+def _point_creepages(side, radius, a, cos_d, sin_d, r0, speed, ws_vyaw, ws_vpitch):
+    """Longitudinal and spin creepage of a contact point at rolling radius ``radius`` and lateral
+    distance ``a`` from the wheelset centre with contact angle delta (cos, sin):
+    xi_x = -(r - r0)/r0 - s a yaw'/V - r pitch'/V, xi_sp = yaw' cos(delta)/V - s sin(delta)/r0
+    (spin in rad/m; module docstring)."""
+    xi_x = -(radius - r0) / r0 - side * a * ws_vyaw / speed - radius * ws_vpitch / speed
+    xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
+    return xi_x, xi_sp
+
+
+@njit(cache=True)
 def _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0, mu,
                         speed, ws_vyaw, ws_vpitch):
     """Creep forces (F_x, F_y in the contact plane, spin moment M_z) of one contact point with
     normal force ``normal`` > 0, rolling radius ``radius`` at lateral distance ``a`` from the
     wheelset centre, contact angle delta (cos, sin) and the lateral creepage ``xi_y`` (after the
-    semi-implicit relaxation, if any): the longitudinal and spin creepages
-    xi_x = -(r - r0)/r0 - s a yaw'/V - r pitch'/V, xi_sp = yaw' cos(delta)/V - s sin(delta)/r0,
+    semi-implicit relaxation, if any): the creepages xi_x, xi_sp of :func:`_point_creepages`,
     Kalker's linear law F_x = -f11 xi_x, F_y = -f22 xi_y - f23 xi_sp, M_z = f23 xi_y - f33 xi_sp,
-    scaled by Shen-Hedrick-Elkins (:func:`_she_factor`). The one formula of the one-point and the
-    two-point kernels (module docstring for the sources)."""
-    xi_x = -(radius - r0) / r0 - side * a * ws_vyaw / speed - radius * ws_vpitch / speed
-    xi_sp = ws_vyaw * cos_d / speed - side * sin_d / r0
+    scaled by Shen-Hedrick-Elkins (:func:`_she_factor`). Creep law ``kalker_she`` of the
+    one-point and the two-point kernels (module docstring for the sources)."""
+    xi_x, xi_sp = _point_creepages(side, radius, a, cos_d, sin_d, r0, speed, ws_vyaw, ws_vpitch)
     tx = -f11 * xi_x
     ty = -f22 * xi_y - f23 * xi_sp
     tm = f23 * xi_y - f33 * xi_sp
     k = _she_factor(tx, ty, mu, normal)
     return k * tx, k * ty, k * tm
+
+
+@njit(cache=True)
+def _polach_spin_factor(eps_m):
+    """Polach's spin function (O. Polach, Vehicle System Dynamics 33 Suppl. (1999) 728-739):
+    K_M = |eps_M| (delta^3/3 - delta^2/2 + 1/6) - sqrt((1 - delta^2)^3)/3 with
+    delta = (eps_M^2 - 1)/(eps_M^2 + 1), the normalised boundary of the area of adhesion.
+    Evaluated with u = 1 - delta = 2/(eps_M^2 + 1), for which the bracket is exactly
+    u^2/2 - u^3/3 and 1 - delta^2 = u (2 - u) (no cancellation as delta -> 1). K_M <= 0;
+    K_M -> -2/3 |eps_M| for small eps_M (Kalker's linear spin term) and -2/(3 eps_M^3) for large
+    ones: the spin acts on the lateral force through the area of adhesion only, so the lateral
+    force of pure spin vanishes at full slip."""
+    e = abs(eps_m)
+    u = 2.0 / (e * e + 1.0)
+    w = u * (2.0 - u)
+    return e * u * u * (0.5 - u / 3.0) - w * np.sqrt(w) / 3.0
+
+
+@njit(cache=True)
+def _polach_forces(normal, xi_x, xi_y, xi_sp, f11, f22, f23, semi_a, semi_b, mu0, speed,
+                   k_a, k_s, fall_a, fall_b):
+    """Polach's creep forces (F_x, F_y; Kalker's sign: against the creepage) and the friction
+    coefficient used, of one contact with normal force ``normal``, creepages xi_x, xi_y, spin
+    xi_sp (rad/m), Kalker's f11 = G a b C11, f22 = G a b C22, f23 = G (ab)^1.5 C23 and the
+    ellipse's semi-axes a (rolling direction), b.
+
+    Sources: O. Polach, "A fast wheel-rail forces calculation computer code", Vehicle System
+    Dynamics 33 Suppl. (1999) 728-739 [P99]; O. Polach, "Creep forces in simulations of traction
+    vehicles running on adhesion limit", Wear 258 (2005) 992-1000 [P05].
+
+    * Equivalent creepage with spin [P99]: s_yC = xi_y + xi_sp a if |xi_y + xi_sp a| > |xi_y|,
+      else xi_y; s_C = sqrt(xi_x^2 + s_yC^2).
+    * Friction falling with the slip velocity w = s_C V [P05]: mu = mu0 [(1 - A) exp(-B w) + A].
+    * Tangential force of the translational creepages [P99; reduction factors kA, kS P05]:
+      F = (2 Q mu / pi) [kA eps/(1 + (kA eps)^2) + arctan(kS eps)],
+      eps = (2/3) C pi a^2 b s_C / (Q mu) = pi G a b c_jj s_C / (4 Q mu),
+      c_jj = sqrt((C11 xi_x/s)^2 + (C22 xi_y/s)^2), s = sqrt(xi_x^2 + xi_y^2); written here with
+      G a b c_jj s = sqrt((f11 xi_x)^2 + (f22 xi_y)^2); F_x = -F xi_x/s_C, F_y = -F xi_y/s_C.
+    * Lateral force of the spin [P99]: F_yS = (9/16) a Q mu K_M k_M xi_sp / s_C (Kalker's sign;
+      K_M <= 0, :func:`_polach_spin_factor`), k_M = 1 + 6.3 (1 - exp(-a/b)),
+      eps_M = (8/3) G b sqrt(ab) C23 |s_yC| / (Q mu k_M) = (8/3) f23 |s_yC| / (a Q mu k_M).
+
+    With kA = kS = 1 and the creepages -> 0 this tends to Kalker's linear law (F_x = -f11 xi_x,
+    F_y = -f22 xi_y - f23 xi_sp; exactly when xi_x = 0 or xi_y = 0, otherwise the force lies
+    along the creepage with Kalker's magnitude); the translational force is at most mu Q
+    (kS <= kA: x/(1 + x^2) + arctan(r x), r <= 1, stays below pi/2). kA, kS < 1 lower its
+    initial slope to (kA + kS)/2 of Kalker's; the spin term is [P99]'s, not reduced."""
+    s_yc = xi_y
+    if abs(xi_y + xi_sp * semi_a) > abs(xi_y):
+        s_yc = xi_y + xi_sp * semi_a
+    s_c = np.sqrt(xi_x * xi_x + s_yc * s_yc)
+    mu = mu0 * ((1.0 - fall_a) * np.exp(-fall_b * s_c * speed) + fall_a)
+    limit = mu * normal
+    if s_c <= 0.0 or limit <= 0.0:
+        return 0.0, 0.0, mu
+    eps = 0.25 * np.pi * np.sqrt((f11 * xi_x) ** 2 + (f22 * xi_y) ** 2) / limit
+    if xi_x != 0.0 or xi_y != 0.0:
+        eps *= s_c / np.sqrt(xi_x * xi_x + xi_y * xi_y)
+    ka_eps = k_a * eps
+    force = 2.0 * limit / np.pi * (ka_eps / (1.0 + ka_eps * ka_eps) + np.arctan(k_s * eps))
+    fx = -force * xi_x / s_c
+    fy = -force * xi_y / s_c
+    if xi_sp != 0.0:
+        k_m = 1.0 + 6.3 * (1.0 - np.exp(-semi_a / semi_b))
+        eps_m = 8.0 * f23 * abs(s_yc) / (3.0 * semi_a * limit * k_m)
+        fy += 0.5625 * semi_a * limit * _polach_spin_factor(eps_m) * k_m * xi_sp / s_c
+    return fx, fy, mu
+
+
+@njit(cache=True)
+def _polach_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0,
+                         mu, speed, ws_vyaw, ws_vpitch, semi_a, semi_b, polach):
+    """Creep law ``polach``: :func:`_point_creep_forces`'s arguments (the point's kinematics, its
+    normal force and Kalker coefficients) plus the ellipse's semi-axes ``semi_a`` (rolling
+    direction) and ``semi_b`` and ``polach`` = (kA, kS, A, B) -> F_x, F_y, M_z. The forces are
+    Polach's (:func:`_polach_forces`). Polach's method gives no spin moment: M_z is Kalker's
+    linear f23 xi_y - f33 xi_sp scaled by the ratio of Polach's tangential force to Kalker's
+    linear one, |F| / |F_lin| (as Shen-Hedrick-Elkins scales all three by one factor)."""
+    xi_x, xi_sp = _point_creepages(side, radius, a, cos_d, sin_d, r0, speed, ws_vyaw, ws_vpitch)
+    fx, fy, _ = _polach_forces(normal, xi_x, xi_y, xi_sp, f11, f22, f23, semi_a, semi_b, mu,
+                               speed, polach[0], polach[1], polach[2], polach[3])
+    tx = -f11 * xi_x
+    ty = -f22 * xi_y - f23 * xi_sp
+    tm = f23 * xi_y - f33 * xi_sp
+    lin = np.sqrt(tx * tx + ty * ty)
+    if lin > 0.0:
+        tm *= np.sqrt(fx * fx + fy * fy) / lin
+    return fx, fy, tm
 
 
 @njit(cache=True)
@@ -586,8 +716,14 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
             g = f22 * creep_relax
             xi_y = (xi_y + g * creep_y_prev) / (1.0 + g)
             xi_y_state = xi_y
-        fx, fy, mz = _point_creep_forces(side, normal, radius, a0, cos_d, sin_d, xi_y,
-                                         f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
+        if scal[SCAL_CREEP_LAW] == 0.0:
+            fx, fy, mz = _point_creep_forces(side, normal, radius, a0, cos_d, sin_d, xi_y,
+                                             f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
+        else:
+            fx, fy, mz = _polach_creep_forces(side, normal, radius, a0, cos_d, sin_d, xi_y, f11,
+                                              f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch,
+                                              row[4] * c, row[5] * c,
+                                              scal[SCAL_CREEP_LAW + 1:SCAL_CREEP_LAW + 5])
     force_y = -side * normal * sin_d + fy * cos_d
     force_z = normal * cos_d + side * fy * sin_d
     # flange: stiff lateral spring beyond the clearance (left flange touches when y_rel > gap)
@@ -641,10 +777,14 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     xi_y*_k = (xi_y_k + g xi_y*_k,prev) / (1 + g) (the backward-Euler value for parallel dampers
     on one velocity; exact in steady state). ``creep_prev[k]`` holds each point's xi_y* (NaN out
     of contact: a point coming into contact starts from the explicit law). ``pts`` is scratch
-    (n_zones, 10).
+    (n_zones, :data:`N_PTS_COLS`).
+
+    Creep law (``scal[SCAL_CREEP_LAW]``): 0 Kalker + Shen-Hedrick-Elkins
+    (:func:`_point_creep_forces`), 1 Polach (:func:`_polach_creep_forces`), for every point.
     """
     g_shear, e_mod, nu, mu, r0 = scal[1], scal[2], scal[3], scal[4], scal[5]
     axis = scal[9] * scal[10]
+    polach = scal[SCAL_CREEP_LAW] != 0.0
     ws_y, ws_z, ws_roll, ws_yaw, ws_vy, ws_vz, ws_vroll, ws_vpitch, ws_vyaw = wheelset
     rail_z, rail_y, rail_vz, rail_vy, rail_roll, rail_vroll = rail
     y_rel = ws_y - rail_y
@@ -679,8 +819,11 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
             continue
         absum = zk[ih, COL_ABSUM] * (1.0 - wh) + zk[ih + 1, COL_ABSUM] * wh
         c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * absum)) ** (1.0 / 3.0)
-        ab = ((zk[ih, COL_M] * (1.0 - wh) + zk[ih + 1, COL_M] * wh)
-              * (zk[ih, COL_N] * (1.0 - wh) + zk[ih + 1, COL_N] * wh) * c * c)
+        m_k = zk[ih, COL_M] * (1.0 - wh) + zk[ih + 1, COL_M] * wh
+        n_k = zk[ih, COL_N] * (1.0 - wh) + zk[ih + 1, COL_N] * wh
+        ab = m_k * n_k * c * c
+        pts[k, 10] = m_k * c
+        pts[k, 11] = n_k * c
         f22 = g_shear * ab * (zk[ih, COL_C22] * (1.0 - wh) + zk[ih + 1, COL_C22] * wh)
         pts[k, 0] = normal
         pts[k, 1] = zk[i, COL_R] * (1.0 - w) + zk[i + 1, COL_R] * w
@@ -717,8 +860,14 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         if creep_relax > 0.0 and creep_prev[k] == creep_prev[k]:
             xi_y = (xi_y + g * creep_prev[k]) / (1.0 + g)
         creep_prev[k] = xi_y
-        fx, fy, mz = _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y,
-                                         f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
+        if polach:
+            fx, fy, mz = _polach_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11,
+                                              f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch,
+                                              pts[k, 10], pts[k, 11],
+                                              scal[SCAL_CREEP_LAW + 1:SCAL_CREEP_LAW + 5])
+        else:
+            fx, fy, mz = _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y,
+                                             f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
         force_y = -side * normal * sin_d + fy * cos_d
         force_z = normal * cos_d + side * fy * sin_d
         fx_sum += fx
@@ -751,7 +900,7 @@ def wheel_contact_points(side: float, geom: ContactGeometry, speed: float, ws: d
     if zones.shape[0] == 0:
         raise ValueError("wheel_contact_points: the geometry has no two-point zone tables")
     out = np.zeros(N_POINT_OUT)
-    pts = np.zeros((zones.shape[0], 10))
+    pts = np.zeros((zones.shape[0], N_PTS_COLS))
     wheelset = tuple(float(ws.get(k, 0.0)) for k in ("y", "z", "roll", "yaw", "vy", "vz", "vroll",
                                                      "vpitch", "vyaw"))
     rails = tuple(float(rail.get(k, 0.0)) for k in ("z", "y", "vz", "vy", "roll", "vroll"))

@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from .curving import curve_frame
-from .contact import N_POINT_OUT
+from .contact import N_POINT_OUT, N_PTS_COLS
 from .kernels import N_WHEEL_OUT, csr_matvec_sub, train_contact
 
 #: The train for a time loop: diagonal inverse mass, suspension stiffness and damping (CSR
@@ -50,7 +50,7 @@ def _work(n_dof, n_ws, n_cols, n_pts):
     return VehicleWork(np.zeros(n_dof), np.zeros((n_ws, 2, N_WHEEL_OUT)), np.zeros(n_cols),
                        np.zeros(N_POINT_OUT), np.zeros((n_ws, 2, n_pts)), np.zeros(n_dof),
                        np.zeros(n_dof), np.zeros(n_dof), np.zeros(n_ws), np.zeros(n_dof),
-                       np.zeros(n_dof), np.zeros((n_pts, 10)))
+                       np.zeros(n_dof), np.zeros((n_pts, N_PTS_COLS)))
 
 
 def vehicle_arrays(model, geom, f_const: np.ndarray, x_lead0: float,

@@ -326,11 +326,15 @@ def linear_system(mass: np.ndarray, stiffness: np.ndarray, damping: np.ndarray,
     ``wheelset_dofs`` (n_ws, 5) the wheelsets' DOF indices (y, z, roll, spin, yaw);
     ``normal`` (n_ws, 2) the static normal loads of the left and right wheels (N). The
     linearisation is that of one contact point per wheel (:func:`ttbpipe.vehicle.contact.
-    _wheel_contact`): a profile pair's two-point geometry (``contact_points: 2``) is refused."""
+    _wheel_contact`): a profile pair's two-point geometry (``contact_points: 2``) and a creep law
+    other than ``kalker_she`` are refused."""
     if getattr(geom, "zones", None) is not None:
         raise ValueError("linear hunting analysis: the contact geometry has two points per wheel "
                          "(train.contact.contact_points: 2); it linearises one point per wheel, "
                          "so set contact_points: 1")
+    if getattr(geom, "creep_law", "kalker_she") != "kalker_she":
+        raise ValueError("linear hunting analysis: it linearises Kalker + Shen-Hedrick-Elkins "
+                         f"(train.contact.creep_law: kalker_she), not {geom.creep_law!r}")
     k = np.array(stiffness, dtype=float, copy=True)
     c = np.array(damping, dtype=float, copy=True)
     spin = np.zeros(k.shape[0], dtype=bool)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .contact import N_COLS, N_POINT_OUT, _wheel_contact, _wheel_contact_points
+from .contact import N_COLS, N_POINT_OUT, N_PTS_COLS, _wheel_contact, _wheel_contact_points
 
 N_WHEEL_OUT = 8
 #: Columns of ``rail_kin`` per wheel (ttbpipe.simulation.loop.track_kinematics).
@@ -40,7 +40,7 @@ def _train_contact(q, v, ws_dofs, table, scal, zones, speed, rail_kin, force, wh
     n_pts = max(zones.shape[0], 1)
     creep_state = np.zeros((ws_dofs.shape[0], 2, n_pts))
     train_contact(q, v, ws_dofs, (table, scal, zones), speed, rail_kin, force, wheel,
-                  (row, tmp, creep_state, np.zeros((n_pts, 10))), 0.0, frame_yaw_rate)
+                  (row, tmp, creep_state, np.zeros((n_pts, N_PTS_COLS))), 0.0, frame_yaw_rate)
 
 
 @njit(cache=True)

@@ -139,10 +139,21 @@ class ContactParameters:
     flange_back_m: float = 1.360          # flange-back spacing of the wheelset
     contact_points: int = 2               # profiles: 2 = tread and flange with forces of their
     #                                       own; 1 = one point per wheel (the smallest gap)
+    # creep law of every contact point (ttbpipe.vehicle.contact): kalker_she = Kalker's linear
+    # theory saturated by Shen-Hedrick-Elkins; polach = Polach's method (large spin, and with
+    # the parameters below the adhesion fall-off with the slip velocity; Polach 1999, 2005)
+    creep_law: str = "kalker_she"
+    polach_k_a: float = 1.0               # reduction factor kA in the area of adhesion (Polach
+    #                                       2005; 1 = Kalker's initial slope, Polach 1999)
+    polach_k_s: float = 1.0               # reduction factor kS in the area of slip (<= kA)
+    polach_a: float = 1.0                 # mu_inf / mu0 at infinite slip velocity (1: no fall-off)
+    polach_b_s_m: float = 0.0             # exponential decrease rate B of the friction (s/m)
 
 
 #: Contact geometries: a cone (closed form), a tabulated file, a wheel and rail profile pair.
 CONTACT_PROFILES = ("conical", "table", "profiles")
+#: Creep laws of the contact points (ttbpipe.vehicle.contact; the kernels' code is the index).
+CREEP_LAWS = ("kalker_she", "polach")
 
 
 @dataclass
@@ -173,6 +184,22 @@ class TrainParameters:
     @property
     def n_cars(self) -> int:
         return len(self.cars)
+
+
+def check_creep_law(contact: ContactParameters) -> None:
+    """The creep law and Polach's parameters of ``train.contact`` (ranges of Polach 2005:
+    0 < kS <= kA <= 1, 0 < A <= 1, B >= 0)."""
+    if contact.creep_law not in CREEP_LAWS:
+        raise ValueError(f"train.contact.creep_law: {contact.creep_law!r}; expected one of "
+                         f"{CREEP_LAWS}")
+    k_a, k_s = contact.polach_k_a, contact.polach_k_s
+    if not (0.0 < k_s <= k_a <= 1.0):
+        raise ValueError(f"train.contact.polach_k_a, polach_k_s: {k_a}, {k_s}; Polach's "
+                         "reduction factors need 0 < k_s <= k_a <= 1")
+    if not (0.0 < contact.polach_a <= 1.0) or contact.polach_b_s_m < 0.0:
+        raise ValueError(f"train.contact.polach_a, polach_b_s_m: {contact.polach_a}, "
+                         f"{contact.polach_b_s_m}; expected 0 < polach_a <= 1 (mu_inf / mu0) "
+                         "and polach_b_s_m >= 0")
 
 
 def _apply_overrides(obj: Any, overrides: Mapping[str, Any], where: str) -> Any:
@@ -230,4 +257,5 @@ def train_from_config(cfg: Mapping[str, Any] | None) -> TrainParameters:
     if contact.profile not in CONTACT_PROFILES:
         raise ValueError(f"train.contact.profile: {contact.profile!r}; expected one of "
                          f"{CONTACT_PROFILES}")
+    check_creep_law(contact)
     return TrainParameters(cars=cars, coupler=coupler, contact=contact)
