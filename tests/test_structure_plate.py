@@ -5,13 +5,14 @@ structure.properties.SLAB) and its CA mortar as a Winkler foundation (3.0e9 N/m2
 width: 1.18e9 N/m3; structure.properties.CA). References and tolerances:
 
 * simply supported rectangle: Navier's exact frequencies omega_mn = pi^2 ((m/a)^2 + (n/b)^2)
-  sqrt(D / rho t) (Leissa 1969, Vibration of Plates, NASA SP-160, eq. 4.21); conforming
+  sqrt(D / rho t) (Navier; Leissa 1969, Vibration of Plates, NASA SP-160, ch. 4); conforming
   elements with consistent mass are Rayleigh-Ritz upper bounds: every frequency above the exact
   one, the first eight within 0.1 % on a 16 x 8 mesh (measured: 4.0e-4 at most, O(h^4));
 * two opposite edges simply supported, two free (the slab's long edges are free): the exact Levy
   characteristic equations (Leissa 1973, J. Sound Vib. 31:257, section 2; free edge: M_y = 0 and
-  V_y = 0), solved here (measured: the first eight within 2.7e-4, O(h^4)); the solver reproduces Leissa's square-plate values for nu = 0.3 (9.6314,
-  16.135, 36.726, 38.945, 46.738, 70.740, from his SS-F-SS-F table) to 1e-4; FE within 0.1 %;
+  V_y = 0), solved here; the solver reproduces Leissa's square-plate values for nu = 0.3
+  (9.6314, 16.135, 36.726, 38.945, 46.738, 70.740, his SS-F-SS-F table) to 1e-4; FE on a
+  16 x 8 mesh within 0.1 % and above (measured: the first eight within 2.7e-4);
 * infinite plate on a Winkler foundation under a point load (Hertz; Timoshenko & Woinowsky-Krieger
   1959, Theory of Plates and Shells, section 57): w(r) = -(P l^2 / (2 pi D)) kei(r / l),
   l = (D / k)^(1/4), w(0) = P / (8 sqrt(k D)). A free quarter plate of 10 l x 10 l with symmetry
