@@ -14,7 +14,7 @@ width: 1.18e9 N/m3; structure.properties.CA). References and tolerances:
   (9.6314, 16.135, 36.726, 38.945, 46.738, 70.740, his SS-F-SS-F table) to 1e-4; FE on a
   16 x 8 mesh within 0.1 % and above (measured: the first eight within 2.7e-4);
 * infinite plate on a Winkler foundation under a point load (Hertz; Timoshenko & Woinowsky-Krieger
-  1959, Theory of Plates and Shells, section 57): w(r) = -(P l^2 / (2 pi D)) kei(r / l),
+  1959, Theory of Plates and Shells, ch. 8): w(r) = -(P l^2 / (2 pi D)) kei(r / l),
   l = (D / k)^(1/4), w(0) = P / (8 sqrt(k D)). A free quarter plate of 10 l x 10 l with symmetry
   conditions, elements l / 4: the load point within 0.2 % (measured -0.10 %, O(h^2) from the
   point load's r^2 log r singularity: -0.42 % at l / 2), the profile at r = l, 2 l, 3 l within

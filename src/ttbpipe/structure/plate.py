@@ -11,14 +11,16 @@ stiffness and consistent mass give Rayleigh-Ritz upper bounds of the plate's fre
 Kirchhoff plate theory (Timoshenko & Woinowsky-Krieger 1959, Theory of Plates and Shells, ch. 4;
 the seed paper's eq. 15): strain energy
 
-    U = D/2 int [w_xx^2 + w_yy^2 + 2 nu w_xx w_yy + 2 (1 - nu) w_xy^2] dA,  D = E t^3 / (12 (1 - nu^2)),
+    U = D/2 int [w_xx^2 + w_yy^2 + 2 nu w_xx w_yy + 2 (1 - nu) w_xy^2] dA,
+    D = E t^3 / (12 (1 - nu^2)),
 
 kinetic energy rho t / 2 int w_t^2 dA (no rotary inertia, the seed paper's eq. 14), and a Winkler
 foundation k / 2 int w^2 dA. With tensor-product shape functions every element matrix is a sum of
 Kronecker products of 1-D integrals (M = int N N^T, G = int N' N'^T, K = int N'' N''^T,
 S = int N'' N^T over the element's length):
 
-    K_e = D [K_x (x) M_y + M_x (x) K_y + nu (S_x (x) S_y^T + S_x^T (x) S_y) + 2 (1 - nu) G_x (x) G_y]
+    K_e = D [K_x (x) M_y + M_x (x) K_y + nu (S_x (x) S_y^T + S_x^T (x) S_y)
+             + 2 (1 - nu) G_x (x) G_y]
     M_e = rho t M_x (x) M_y,   foundation k M_x (x) M_y,
 
 evaluated here exactly (4-point Gauss, exact for the degree-6 products). Element DOFs in Kronecker
