@@ -23,7 +23,7 @@ width: 1.18e9 N/m3; structure.properties.CA). References and tolerances:
   (edge moments M: w = -M (x^2 - nu y^2) / (2 D (1 - nu^2)), the anticlastic surface) and pure
   twist (rectangle on three corners loaded at the fourth: w = P x y / (2 D (1 - nu))).
 
-About 3 s.
+About 2 s.
 """
 
 import numpy as np
