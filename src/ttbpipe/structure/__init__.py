@@ -10,7 +10,9 @@ Linear part of the Xu-Zhai-Li train-track-bridge model (paper sections 2.2.4-2.2
   (docs/dev/structure_interface.md); :mod:`.monitors` (recorded points), :mod:`.static`
   (K u = f);
 * :func:`~ttbpipe.structure.moving_loads.simulate` -- moving point loads, Zhai time loop;
-* :func:`~ttbpipe.structure.modal.modal_analysis` -- frequencies and mode shapes.
+* :func:`~ttbpipe.structure.modal.modal_analysis` -- frequencies and mode shapes;
+* :mod:`.plate` -- Kirchhoff thin-plate element (the slab measured as a plate against the beam,
+  docs/structure.md section 10).
 
 Decisions and validation: docs/structure.md.
 """
