@@ -108,7 +108,7 @@ def test_polach_tends_to_kalker_linear_theory(name):
     """Small creepages (Kalker's linear force 0.1 % of mu N): Polach's forces equal Kalker's
     F_x = -f11 xi_x, F_y = -f22 xi_y - f23 xi_sp within 0.1 % of the force for pure
     longitudinal, lateral and spin creepage and for lateral creepage with spin (of either sign);
-    Polach's deviation is of second order, (2/3) eps^2 (the brief asks for a few per cent).
+    Polach's deviation is of second order, (2/3) eps^2.
     Longitudinal with lateral creepage: Polach's force lies along the creepage with Kalker's
     magnitude sqrt((f11 xi_x)^2 + (f22 xi_y)^2) (Polach's C_jj; exact to 0.1 %)."""
     e = ellipse(ELLIPSES[name])
