@@ -539,11 +539,31 @@ def _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f
     scaled by Shen-Hedrick-Elkins (:func:`_she_factor`). Creep law ``kalker_she`` of the
     one-point and the two-point kernels (module docstring for the sources)."""
     xi_x, xi_sp = _point_creepages(side, radius, a, cos_d, sin_d, r0, speed, ws_vyaw, ws_vpitch)
-    tx = -f11 * xi_x
-    ty = -f22 * xi_y - f23 * xi_sp
-    tm = f23 * xi_y - f33 * xi_sp
+    tx, ty, tm = _kalker_linear(xi_x, xi_y, xi_sp, f11, f22, f23, f33)
     k = _she_factor(tx, ty, mu, normal)
     return k * tx, k * ty, k * tm
+
+
+@njit(cache=True)
+def _kalker_linear(xi_x, xi_y, xi_sp, f11, f22, f23, f33):
+    """Kalker's linear creep forces F_x = -f11 xi_x, F_y = -f22 xi_y - f23 xi_sp and spin moment
+    M_z = f23 xi_y - f33 xi_sp (module docstring)."""
+    return -f11 * xi_x, -f22 * xi_y - f23 * xi_sp, f23 * xi_y - f33 * xi_sp
+
+
+@njit(cache=True)
+def _creep_forces(scal, side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0,
+                  mu, speed, ws_vyaw, ws_vpitch, semi_a, semi_b):
+    """F_x, F_y, M_z of one contact point by the creep law ``scal[SCAL_CREEP_LAW]`` (0
+    Kalker + Shen-Hedrick-Elkins, :func:`_point_creep_forces`; 1 Polach,
+    :func:`_polach_creep_forces`, which also needs the ellipse's semi-axes): the one dispatch
+    of the one-point and the two-point kernels."""
+    if scal[SCAL_CREEP_LAW] == 0.0:
+        return _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23,
+                                   f33, r0, mu, speed, ws_vyaw, ws_vpitch)
+    return _polach_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33,
+                                r0, mu, speed, ws_vyaw, ws_vpitch, semi_a, semi_b,
+                                scal[SCAL_CREEP_LAW + 1:SCAL_CREEP_LAW + 5])
 
 
 @njit(cache=True)
@@ -625,9 +645,7 @@ def _polach_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, 
     xi_x, xi_sp = _point_creepages(side, radius, a, cos_d, sin_d, r0, speed, ws_vyaw, ws_vpitch)
     fx, fy, _ = _polach_forces(normal, xi_x, xi_y, xi_sp, f11, f22, f23, semi_a, semi_b, mu,
                                speed, polach[0], polach[1], polach[2], polach[3])
-    tx = -f11 * xi_x
-    ty = -f22 * xi_y - f23 * xi_sp
-    tm = f23 * xi_y - f33 * xi_sp
+    tx, ty, tm = _kalker_linear(xi_x, xi_y, xi_sp, f11, f22, f23, f33)
     lin = np.sqrt(tx * tx + ty * ty)
     if lin > 0.0:
         tm *= np.sqrt(fx * fx + fy * fy) / lin
@@ -716,14 +734,9 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
             g = f22 * creep_relax
             xi_y = (xi_y + g * creep_y_prev) / (1.0 + g)
             xi_y_state = xi_y
-        if scal[SCAL_CREEP_LAW] == 0.0:
-            fx, fy, mz = _point_creep_forces(side, normal, radius, a0, cos_d, sin_d, xi_y,
-                                             f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
-        else:
-            fx, fy, mz = _polach_creep_forces(side, normal, radius, a0, cos_d, sin_d, xi_y, f11,
-                                              f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch,
-                                              row[4] * c, row[5] * c,
-                                              scal[SCAL_CREEP_LAW + 1:SCAL_CREEP_LAW + 5])
+        fx, fy, mz = _creep_forces(scal, side, normal, radius, a0, cos_d, sin_d, xi_y, f11, f22,
+                                   f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch, row[4] * c,
+                                   row[5] * c)
     force_y = -side * normal * sin_d + fy * cos_d
     force_z = normal * cos_d + side * fy * sin_d
     # flange: stiff lateral spring beyond the clearance (left flange touches when y_rel > gap)
@@ -784,7 +797,6 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     """
     g_shear, e_mod, nu, mu, r0 = scal[1], scal[2], scal[3], scal[4], scal[5]
     axis = scal[9] * scal[10]
-    polach = scal[SCAL_CREEP_LAW] != 0.0
     ws_y, ws_z, ws_roll, ws_yaw, ws_vy, ws_vz, ws_vroll, ws_vpitch, ws_vyaw = wheelset
     rail_z, rail_y, rail_vz, rail_vy, rail_roll, rail_vroll = rail
     y_rel = ws_y - rail_y
@@ -860,14 +872,9 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         if creep_relax > 0.0 and creep_prev[k] == creep_prev[k]:
             xi_y = (xi_y + g * creep_prev[k]) / (1.0 + g)
         creep_prev[k] = xi_y
-        if polach:
-            fx, fy, mz = _polach_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11,
-                                              f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch,
-                                              pts[k, 10], pts[k, 11],
-                                              scal[SCAL_CREEP_LAW + 1:SCAL_CREEP_LAW + 5])
-        else:
-            fx, fy, mz = _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y,
-                                             f11, f22, f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch)
+        fx, fy, mz = _creep_forces(scal, side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22,
+                                   f23, f33, r0, mu, speed, ws_vyaw, ws_vpitch, pts[k, 10],
+                                   pts[k, 11])
         force_y = -side * normal * sin_d + fy * cos_d
         force_z = normal * cos_d + side * fy * sin_d
         fx_sum += fx
