@@ -170,6 +170,16 @@ def _evaluate(t, state, placed, work, packed, mesh, ws_x, rail_kin, first):
 
 
 @njit(cache=True)
+def _advance(u, v, a, a_prev, dt, psi):
+    """Zhai's predictor for one system (displacements and velocities at the new step from this
+    and the previous step's accelerations; :func:`ttbpipe.timestepping.zhai.zhai_predict`),
+    then this step's accelerations become the previous ones."""
+    zhai_predict(u, v, a, a_prev, dt, psi, psi)
+    for i in range(a.shape[0]):
+        a_prev[i] = a[i]
+
+
+@njit(cache=True)
 def _coupled_loop(state, placed, packed, mesh, monitors, train, dt, n_steps, out_every):
     """Zhai explicit integration of train + structure; returns (status, step).
 
@@ -192,12 +202,8 @@ def _coupled_loop(state, placed, packed, mesh, monitors, train, dt, n_steps, out
     for n in range(-1, n_steps):
         if n >= 0:
             psi = 0.0 if n == 0 else 0.5
-            zhai_predict(q, v, a, a_prev, dt, psi, psi)
-            zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
-            for i in range(q.shape[0]):
-                a_prev[i] = a[i]
-            for i in range(disp.shape[0]):
-                acc_prev[i] = acc[i]
+            _advance(q, v, a, a_prev, dt, psi)
+            _advance(disp, vel, acc, acc_prev, dt, psi)
             _evaluate((n + 1) * dt, state, placed, work, packed, mesh, ws_x, rail_kin, False)
         step = n + 1
         if record_wheel_step(train, work.wheel, step) == 0:
@@ -257,12 +263,8 @@ def _coupled_loop_pair(state, state_b, placed, placed_b, packed, mesh, monitors,
         if n >= 0:
             psi = 0.0 if n == 0 else 0.5
             for st in (state, state_b):
-                zhai_predict(st.q, st.v, st.a, st.a_prev, dt, psi, psi)
-                for i in range(st.q.shape[0]):
-                    st.a_prev[i] = st.a[i]
-            zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
-            for i in range(disp.shape[0]):
-                acc_prev[i] = acc[i]
+                _advance(st.q, st.v, st.a, st.a_prev, dt, psi)
+            _advance(disp, vel, acc, acc_prev, dt, psi)
             _evaluate_pair((n + 1) * dt, state, state_b, placed, placed_b, work, work_b, packed,
                            mesh, scratch, False)
         step = n + 1
