@@ -101,6 +101,71 @@ def test_coned_wheelset_rolls_without_longitudinal_creep_at_the_pure_rolling_off
         assert np.sign(yaw_moment) == -np.sign(dy)
 
 
+@pytest.mark.parametrize("radius_m", [1500.0, 3000.0])
+def test_free_coned_wheelset_on_a_curve_oscillates_about_the_pure_rolling_offset(radius_m):
+    """The free coned wheelset on a curve (lambda 0.04, r0 0.43 m, a0 0.7465 m), in the time
+    loop: one trailer car whose wheelsets are free in yaw (primary_kx = 0) and laterally (a
+    vanishing 1 kN/m per axle box keeps the static problem regular: ky/m = 0.8 1/s^2 against
+    the kinematic omega^2 = 15 1/s^2) at 40 km/h on a curve with the balancing cant (no
+    lateral force is needed). Kinematic theory (Wickens 2003, section 2; Iwnicki 2006) puts the
+    wheelset at the pure-rolling offset r0 a0 / (lambda R) (5.35 mm and 2.67 mm outwards).
+
+    - The static state on the arc has every wheelset there within 0.1 % (measured 3e-5).
+    - Moved 1 mm off that line, the leading wheelset does not settle: a free wheelset is
+      unstable at every speed (Wickens; tests/test_hunting.py), so it performs the kinematic
+      oscillation *about* the pure-rolling line, slowly growing. A least-squares fit of
+      y_c + exp(sigma t) (a cos omega t + b sin omega t) to 20 s of it gives the centre y_c
+      within 0.1 % of r0 a0 / (lambda R) (measured 3e-5), omega within 0.1 % of Klingel's
+      kinematic frequency for the model's cone (the closed form of
+      ttbpipe.vehicle.hunting.klingel_frequency; measured 1.1e-4) and sigma within 5 % of the
+      real part of the linear free-wheelset eigenvalue (the wheelset alone, the rest held;
+      measured 0.7 %), a growth of 0.018 1/s."""
+    from scipy.optimize import curve_fit
+
+    from ttbpipe.vehicle import hunting as lin
+    from ttbpipe.vehicle.contact import build_geometry
+    from ttbpipe.vehicle.model import build_train_model
+    from ttbpipe.vehicle.parameters import train_from_config
+
+    speed_kmh, v = 40.0, 40.0 / 3.6
+    balancing_cant_mm = v * v / radius_m / STANDARD_GRAVITY * CANT_BASE_M * 1000.0
+    curve = {"start_x_m": -1000.0, "transition_m": 0.0, "length_m": 5000.0,
+             "radius_m": radius_m, "cant_mm": balancing_cant_mm, "direction": "left"}
+    train = {"composition": ["trailer"], "trailer": {"primary_kx": 0.0, "primary_ky": 1.0e3}}
+    setup = prepare({"train": train,
+                     "simulation": {"track": "rigid", "speed_kmh": speed_kmh, "duration_s": 20.0,
+                                    "time_step_s": 1e-4, "output_every": 10,
+                                    "layout": {"curves": [curve]}},
+                     "irregularity": {"source": "none"}})
+    geom, contact = setup.geom, setup.train.contact
+    a0, r0, lam = geom.scalars()[6], contact.wheel_radius, contact.conicity
+    pure = -r0 * a0 / (lam * radius_m)        # outwards of a left-hand curve: negative y
+    ws_y = setup.model.wheelset_dofs[:, 0]
+    assert np.abs(setup.q0[ws_y] / pure - 1.0).max() < 1e-3
+
+    q = setup.q0.copy()
+    q[ws_y[0]] += 1.0e-3
+    setup.q0 = q
+    run = integrate(setup)
+    lead = run.q[:, ws_y[0]]
+
+    def oscillation(t, centre, a, b, sigma, omega):
+        return centre + np.exp(sigma * t) * (a * np.cos(omega * t) + b * np.sin(omega * t))
+
+    klingel = 2.0 * np.pi * lin.klingel_frequency(v, lam, r0, a0, float(np.arctan(lam)))
+    fit, _ = curve_fit(oscillation, run.time, lead, p0=[pure, 1e-3, 0.0, 0.0, klingel])
+    centre, sigma, omega = fit[0], fit[3], fit[4]
+    assert abs(centre / pure - 1.0) < 1e-3, (centre, pure)
+    assert omega == pytest.approx(klingel, rel=1e-3)
+
+    model_train = train_from_config(train)
+    statics = lin.car_statics(build_train_model(model_train), build_geometry(model_train.contact))
+    eig, _ = lin.car_system(statics, lin.contact_slopes(statics.geom), v, bodies=(3,)).modes()
+    kinematic = eig[np.argmin(np.abs(np.abs(eig.imag) - klingel))]
+    assert kinematic.real > 0.0 and sigma > 0.0
+    assert sigma == pytest.approx(kinematic.real, rel=0.05)
+
+
 def test_layout_heading_and_offset_integrate_the_curvature():
     """Heading and lateral offset of the track frame through clothoid transitions and a reverse
     curve against a second method (trapezoidal integration of the same curvature on a 1 cm
