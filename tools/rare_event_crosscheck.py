@@ -9,6 +9,7 @@ summary table; docs/reliability.md reports the result.
     python tools/rare_event_crosscheck.py --out results/crosscheck --mc-samples 3000 --workers 2
     python tools/rare_event_crosscheck.py --out results/crosscheck --stage subset --limit 0.45
     python tools/rare_event_crosscheck.py --out results/crosscheck --stage evt --limit 0.45
+    python tools/rare_event_crosscheck.py --out results/crosscheck --stage line --limit 0.45
 
 (``--stage all``: Monte Carlo, then subset simulation and the tail model at the limit chosen
 from the Monte Carlo runs, the rounded ``--mc-quantile``.) The Monte Carlo points and the
@@ -70,7 +71,12 @@ def main(argv=None) -> int:
     parser.add_argument("--end-x-m", type=float, default=70.0)
     parser.add_argument("--approach-m", type=float, default=20.0)
     parser.add_argument("--profile-length-m", type=float, default=150.0)
-    parser.add_argument("--stage", choices=["mc", "subset", "evt", "all"], default="all")
+    parser.add_argument("--stage", choices=["mc", "subset", "evt", "line", "all"], default="all")
+    parser.add_argument("--line-n-per-level", type=int, default=300,
+                        help="line sampling: points per level of the direction's subset simulation")
+    parser.add_argument("--line-levels", type=int, default=3)
+    parser.add_argument("--direction-lines", type=int, default=50)
+    parser.add_argument("--n-lines", type=int, default=100)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     from ttbpipe.reliability import SubsetSettings, SubsetSimulation
@@ -125,6 +131,21 @@ def main(argv=None) -> int:
         result = sus.result()
         summary["subset"] = {**result.as_row(), "wall_s_this_call": time.time() - t0}
         result.details["levels"].to_csv(out / f"subset_levels_{limit:g}.csv", index=False)
+        print(result, flush=True)
+    if args.stage == "line":
+        from ttbpipe.reliability import estimate_failure_probability
+
+        g = CoupledLimitState(case, inputs, args.index, limit, args.workers)
+        t0 = time.time()
+        result = estimate_failure_probability(
+            g, inputs.n_dims, method="line_sampling", seed=args.seed, n_lines=args.n_lines,
+            direction_n_per_level=args.line_n_per_level, direction_levels=args.line_levels,
+            direction_lines=args.direction_lines)
+        g.close()
+        summary["line_sampling"] = {**result.as_row(), "wall_s_this_call": time.time() - t0,
+                                    "n_direction_evaluations":
+                                        result.details["n_direction_evaluations"]}
+        np.save(out / f"line_probabilities_{limit:g}.npy", result.details["line_probabilities"])
         print(result, flush=True)
     if args.stage in ("evt", "all"):
         from ttbpipe.reliability.tail import TailNotEstimable, TailSettings, estimate_tail

@@ -18,7 +18,7 @@ own identifiers, never on the batch, the number of samples drawn or the core cou
 * :data:`RARE_EVENT` (11): the rare-event estimators of :mod:`ttbpipe.reliability`: plain Monte
   Carlo point ``i``, ``[seed, 11, 0, i]``; subset simulation level-0 point ``i``,
   ``[seed, 11, 1, 0, i]``, and the Markov chain seeded by seed point ``c`` at level ``l >= 1``,
-  ``[seed, 11, 1, l, c]``. The seed is the study seed in a study, the caller's seed in
+  ``[seed, 11, 1, l, c]``; line sampling's line ``i``, ``[seed, 11, 2, i]``. The seed is the study seed in a study, the caller's seed in
   :func:`ttbpipe.reliability.estimate_failure_probability`.
 
 **Campaign tree** ``SeedSequence([study.seed, yyyymmdd(date), stream, ...])`` (the campaign date
@@ -79,6 +79,7 @@ RARE_EVENT = 11
 #: Word after :data:`RARE_EVENT` naming the estimator.
 RARE_EVENT_MONTE_CARLO = 0
 RARE_EVENT_SUBSET = 1
+RARE_EVENT_LINE = 2
 
 # --- campaign tree: SeedSequence([study.seed, yyyymmdd(date), stream, ...]) --------------------
 #: Profiles of a campaign's representative PSD sets (ttbpipe.tipm.stages.profiles_stage).

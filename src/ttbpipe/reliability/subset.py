@@ -388,6 +388,13 @@ class SubsetSimulation:
             [self.seed, streams.RARE_EVENT, streams.RARE_EVENT_SUBSET, self.level, c]))
             for c in range(nc)]
 
+    def last_level(self) -> tuple[np.ndarray, np.ndarray]:
+        """Copies of the finished run's last-level states and their g values (N, n_dims), (N,):
+        all lie in the deepest intermediate event (or the failure domain)."""
+        if not self.done:
+            raise RuntimeError("subset simulation not finished: keep calling ask()/tell()")
+        return self._u.copy(), self._g.copy()
+
     # --- result -----------------------------------------------------------------------------
     def levels_table(self) -> pd.DataFrame:
         """One row per level: threshold, conditional probability, c.o.v., gamma, acceptance."""
