@@ -83,6 +83,25 @@ def line_points(seed: int, n_dims: int, indices: np.ndarray) -> np.ndarray:
     return out
 
 
+class _Recorded:
+    """``g`` (checked by :func:`evaluate_limit_state`) keeping every point it evaluated and its
+    value, for the direction's regression."""
+
+    def __init__(self, g: Callable[[np.ndarray], np.ndarray], what: str) -> None:
+        self.g, self.what = g, what
+        self.points: list[np.ndarray] = []
+        self.values: list[np.ndarray] = []
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        values = evaluate_limit_state(self.g, points, self.what)
+        self.points.append(np.array(points, dtype=float, copy=True))
+        self.values.append(values.copy())
+        return values
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.concatenate(self.points), np.concatenate(self.values)
+
+
 def _regression_gradient(points: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Slope b of the least-squares plane ``g ~ b0 + b . u`` through the evaluated points.
 
@@ -130,15 +149,7 @@ def important_direction(g: Callable[[np.ndarray], np.ndarray], n_dims: int, seed
     lineages, so their mean carries about sqrt(n_dims / 20) of noise beside a signal of 3
     (cosine 0.73 to the true normal of a linear limit state in 200 dimensions, line-sampling
     estimates 0.43 of the exact value on average over 20 seeds; docs/reliability.md section 12)."""
-    seen_u: list[np.ndarray] = []
-    seen_g: list[np.ndarray] = []
-
-    def recording(points: np.ndarray) -> np.ndarray:
-        values = evaluate_limit_state(g, points, "line sampling, direction search")
-        seen_u.append(points.copy())
-        seen_g.append(values.copy())
-        return values
-
+    recording = _Recorded(g, "line sampling, direction search")
     sus = SubsetSimulation(n_dims, seed, SubsetSettings(n_per_level=n_per_level,
                                                         max_levels=int(levels)))
     sus.run(recording)
@@ -147,7 +158,7 @@ def important_direction(g: Callable[[np.ndarray], np.ndarray], n_dims: int, seed
     # the deepest event the states were drawn in has probability p0^m (all levels but the
     # last); its reliability index starts the root search
     p_region = float(np.prod(table["conditional_probability"].iloc[:-1]))
-    points, g_values = np.concatenate(seen_u), np.concatenate(seen_g)
+    points, g_values = recording.arrays()
     alpha = _fitted_direction(points, g_values, states.mean(axis=0))
     return alpha, float(stats.norm.isf(p_region)), int(sus.n_evaluations), \
         {"levels": table, "g_min": float(values.min())}, points, g_values
@@ -289,22 +300,14 @@ def line_sampling(g: Callable[[np.ndarray], np.ndarray], n_dims: int, *, seed: i
             # refinement: lines along the first direction add points near the limit state
             # (their crossings bracketed from both sides); the plane is fitted again through
             # every point so far. Lines 0 .. first-1 serve the direction only.
-            pilot_u: list[np.ndarray] = []
-            pilot_g: list[np.ndarray] = []
-
-            def recording(points: np.ndarray) -> np.ndarray:
-                values = evaluate_limit_state(g, points, "line sampling, direction lines")
-                pilot_u.append(points.copy())
-                pilot_g.append(values.copy())
-                return values
-
+            recording = _Recorded(g, "line sampling, direction lines")
             z = line_points(seed, n_dims, np.arange(first))
             c_pilot, _, used = _roots(recording, z - np.outer(z @ alpha, alpha), alpha,
                                       float(np.clip(c_start, -c_max + 1.0, c_max - 1.0)),
                                       float(c_max), float(root_tolerance), int(max_iterations))
             spent += used
-            seen_u = np.concatenate([seen_u] + pilot_u)
-            seen_g = np.concatenate([seen_g] + pilot_g)
+            pilot_u, pilot_g = recording.arrays()
+            seen_u, seen_g = np.concatenate([seen_u, pilot_u]), np.concatenate([seen_g, pilot_g])
             alpha = _fitted_direction(seen_u, seen_g, alpha)
             finite = np.isfinite(c_pilot)
             if finite.any():
