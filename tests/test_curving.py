@@ -226,17 +226,27 @@ def test_a_run_starting_on_the_arc_starts_in_its_steady_state():
     assert np.abs(run.q[first][:, ws_y] - setup.q0[ws_y]).max() < 5e-5
 
 
-def _car_on_a_canted_bridge(cant_mm: float, speed_kmh: float = 200.0, radius_m: float = 4000.0):
+def _car_on_a_canted_bridge(cant_mm: float, speed_kmh: float = 200.0, radius_m: float = 4000.0,
+                            direction: int = 1, tracks: int = 1):
     """One trailer car standing (statics at speed) in the middle of three 32 m slab-track spans,
-    the whole model on a left-hand arc of ``radius_m`` with ``cant_mm``."""
+    the whole model on a left-hand arc of ``radius_m`` with ``cant_mm``, running +x or -x;
+    ``tracks: 2`` a double-track deck with a second car on the other track running the other
+    way, beside the first."""
     curve = {"start_x_m": -1000.0, "transition_m": 0.0, "length_m": 5000.0,
              "radius_m": radius_m, "cant_mm": cant_mm, "direction": "left"}
-    return {"train": {"composition": ["trailer"]},
+    # the wheelsets at 75, 77.5, 92.5 and 95 m (middle span 62-94 m) in either direction
+    start, end = (95.0, 96.0) if direction == 1 else (75.0, 74.0)
+    case = {"train": {"composition": ["trailer"]},
             "structure": {"layout": {"approach_length_m": 30.0, "spans_m": [32.0, 32.0, 32.0],
-                                     "approach_track": "slab", "bridge_track": "slab"}},
-            "simulation": {"speed_kmh": speed_kmh, "start_x_m": 95.0, "end_x_m": 96.0,
-                           "time_step_s": 1e-4, "layout": {"curves": [curve]}},
+                                     "approach_track": "slab", "bridge_track": "slab",
+                                     "tracks": tracks}},
+            "simulation": {"speed_kmh": speed_kmh, "start_x_m": start, "end_x_m": end,
+                           "direction": direction, "time_step_s": 1e-4,
+                           "layout": {"curves": [curve]}},
             "irregularity": {"source": "none"}}
+    if tracks == 2:
+        case["second_train"] = {"start_x_m": 75.0 if direction == 1 else 95.0}
+    return case
 
 
 def _bearing_reactions(setup) -> tuple[float, float]:
@@ -252,8 +262,8 @@ def _bearing_reactions(setup) -> tuple[float, float]:
     return totals["bearing_y"], totals["bearing_z"]
 
 
-@pytest.mark.parametrize("cant_mm", [118.0, 60.0, 0.0])
-def test_the_girders_carry_the_weight_down_and_the_centrifugal_force_outwards(cant_mm):
+@pytest.mark.parametrize("cant_mm, direction", [(118.0, 1), (60.0, 1), (0.0, 1), (60.0, -1)])
+def test_the_girders_carry_the_weight_down_and_the_centrifugal_force_outwards(cant_mm, direction):
     """A car on a canted curve over a bridge: the track (rails, pads, slab) lies in the canted
     plane and the CA mortar turns its loads into the level girder. Statics (independent of the
     model): a body moving at V on a horizontal arc of radius R needs the horizontal centripetal
@@ -264,8 +274,12 @@ def test_the_girders_carry_the_weight_down_and_the_centrifugal_force_outwards(ca
     within 1 % of m V^2 / R and 0.1 % of m g (the part the rails carry past the bridge ends is
     below 1e-4 with the car in the middle span; measured 0.015-0.02 % and 4e-6). Without the
     rotation at the CA mortar the girders took the track-plane forces as if they were level:
-    -0.3 % of m V^2 / R at balanced cant, 49 % at 60 mm (measured; the test fails)."""
-    setup = prepare(_car_on_a_canted_bridge(cant_mm))
+    -0.3 % of m V^2 / R at balanced cant, 49 % at 60 mm (measured; the test fails).
+
+    A car running -x meets the same curve as a right-hand one (ttbpipe.vehicle.curving.
+    layout_along): the bearings still take the centrifugal force outwards (global -y), and
+    the rails' lateral force on the wheels, in the car's own axes, changes sign."""
+    setup = prepare(_car_on_a_canted_bridge(cant_mm, direction=direction))
     lateral, vertical = _bearing_reactions(setup)
     mass = setup.model.mass[0::5].sum()
     v = 200.0 / 3.6
@@ -274,7 +288,31 @@ def test_the_girders_carry_the_weight_down_and_the_centrifugal_force_outwards(ca
     assert lateral == pytest.approx(-centrifugal, rel=0.01), (lateral, -centrifugal)
     assert vertical == pytest.approx(-mass * STANDARD_GRAVITY, rel=1e-3)
     theta = np.arcsin(cant_mm / 1000.0 / CANT_BASE_M)
-    in_plane = setup.static_wheel[:, :, 1].sum()
+    in_plane = direction * setup.static_wheel[:, :, 1].sum()
     assert in_plane == pytest.approx(mass * (v * v / 4000.0 * np.cos(theta)
                                              - STANDARD_GRAVITY * np.sin(theta)),
                                      rel=0.01, abs=0.01 * centrifugal)
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_two_trains_passing_on_a_canted_double_track_curve(direction):
+    """Two cars side by side on the two tracks of a double-track deck on a left-hand curve of
+    4000 m with 60 mm cant, running opposite ways: the bearings take the centrifugal force of
+    both, 2 m V^2 / R outwards, and 2 m g, within 1 % and 0.1 % (statics, as the one-car
+    test; both cars see the layout's radius, the tracks' own radii differ from it by half their
+    spacing: 0.06 %; measured 0.04-0.05 % and 5e-6), and each car's rails push it inwards with the same cant-deficiency force
+    in its own axes (one running +x on a left-hand curve, the other -x on what is for it a
+    right-hand one)."""
+    setup = prepare(_car_on_a_canted_bridge(60.0, direction=direction, tracks=2))
+    lateral, vertical = _bearing_reactions(setup)
+    mass = setup.model.mass[0::5].sum()
+    v = 200.0 / 3.6
+    centrifugal = mass * v * v / 4000.0
+    assert lateral == pytest.approx(-2.0 * centrifugal, rel=0.01), (lateral, -2 * centrifugal)
+    assert vertical == pytest.approx(-2.0 * mass * STANDARD_GRAVITY, rel=1e-3)
+    theta = np.arcsin(0.06 / CANT_BASE_M)
+    deficiency = mass * (v * v / 4000.0 * np.cos(theta) - STANDARD_GRAVITY * np.sin(theta))
+    first = direction * setup.static_wheel[:, :, 1].sum()
+    second = -direction * setup.second.static_wheel[:, :, 1].sum()
+    assert first == pytest.approx(deficiency, rel=0.01)
+    assert second == pytest.approx(deficiency, rel=0.01)

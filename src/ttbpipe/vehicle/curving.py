@@ -136,12 +136,35 @@ def _integrate_knots(xs: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.nda
     return heading, offset
 
 
-def curve_arrays(model, layout: Mapping[str, Any] | None) -> CurveArrays:
-    """:class:`CurveArrays` of a train model on a ``simulation.layout`` (inactive when there
-    are no curves: the loop then skips every curve term)."""
+def layout_along(layout: Mapping[str, Any] | None, direction: int) -> dict:
+    """The ``simulation.layout`` as a train running in ``direction`` sees it, in its own
+    travel chainage s = direction x (the coordinate its lead wheelset advances in).
+
+    For -x every curve is met from its far end: it spans s in [-(x0 + 2 l_t + l_c), -x0] and
+    turns the other way (a left-hand curve for +x is a right-hand one for -x); its radius,
+    clothoids (both of the same length) and cant are the same, the raised rail is the same
+    physical (outer) rail."""
+    layout = dict(layout or {})
+    if int(direction) == 1:
+        return layout
+    if int(direction) != -1:
+        raise ValueError(f"direction must be 1 or -1, got {direction}")
+    mirrored = []
+    for c in layout.get("curves") or []:
+        lt, lc = float(c.get("transition_m", 0.0)), float(c["length_m"])
+        turned = "right" if c.get("direction", "left") == "left" else "left"
+        mirrored.append({**c, "start_x_m": -(float(c["start_x_m"]) + 2.0 * lt + lc),
+                         "direction": turned})
+    return {**layout, "curves": mirrored}
+
+
+def curve_arrays(model, layout: Mapping[str, Any] | None, direction: int = 1) -> CurveArrays:
+    """:class:`CurveArrays` of a train model running in ``direction`` (+1: +x, -1: -x) on a
+    ``simulation.layout`` (:func:`layout_along`; inactive when there are no curves: the loop
+    then skips every curve term)."""
     from .model import BODIES_PER_CAR, DOF_PER_BODY, DOF_PER_CAR, WHEELSETS, _body_positions
 
-    layout = dict(layout or {})
+    layout = layout_along(layout, direction)
     xs, ks, ts = layout_knots(layout)
     heading, offset = _integrate_knots(xs, ks)
     params = model.params
