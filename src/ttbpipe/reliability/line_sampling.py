@@ -33,8 +33,8 @@ The linear-regression direction replaces the conditional mean of the Markov-chai
 Koutsourelakis et al. (2004, section 4) propose, which was measured too noisy in hundreds of
 dimensions (:func:`important_direction`). Or an array given by the caller (a design point from
 FORM, engineering insight; no refinement). Every evaluation is counted in ``n_evaluations``;
-the estimating lines are drawn after the direction is fixed, so the estimate is unbiased
-whatever the direction's error, which shows only in the c.o.v.
+the estimating lines are drawn after the direction is fixed, so (for lines that cross once)
+the estimate is unbiased whatever the direction's error, which shows only in the c.o.v.
 
 Root search: per line, a bracketed secant iteration (the Illinois variant of regula falsi,
 Dowell & Jarratt 1971, BIT 11:168) from ``c = c_start`` and ``c_start + 1``, where
