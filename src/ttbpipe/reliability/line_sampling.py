@@ -38,8 +38,9 @@ the estimate is unbiased whatever the direction's error, which shows only in the
 
 Root search: per line, a bracketed secant iteration (the Illinois variant of regula falsi,
 Dowell & Jarratt 1971, BIT 11:168) from ``c = c_start`` and ``c_start + 1``, where
-``c_start`` is the reliability index of the subset simulation's last level, expanded by steps
-of 1.5 until the sign changes; all open lines are evaluated together, so that each iteration is
+``c_start`` is the reliability index of the subset simulation's deepest event (for the
+estimating lines: the refinement lines' median crossing; 3 for a given direction), expanded by
+steps of 1.5 until the sign changes; all open lines are evaluated together, so that each iteration is
 one vectorised call of ``g`` (one batch of coupled runs). Stops at ``|dc| < root_tolerance``.
 
 C.o.v. and interval: ``cov = std(p_i) / (sqrt(n_lines) P)``, the interval lognormal with that
