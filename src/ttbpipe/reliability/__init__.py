@@ -44,8 +44,8 @@ def estimate_failure_probability(g: Callable[[np.ndarray], np.ndarray], n_dims: 
     ``confidence_level``, ``lineage_lag``). ``method="monte_carlo"``: ``n_samples``, ``batch_size``,
     ``confidence_level``, ``interval`` (``"wilson"`` or ``"clopper-pearson"``).
     ``method="line_sampling"``: ``n_lines``, ``direction`` (``"subset"`` or an array),
-    ``direction_n_per_level``, ``direction_levels``, ``c_max``, ``root_tolerance``,
-    ``max_iterations``, ``confidence_level``. The result
+    ``direction_n_per_level``, ``direction_levels``, ``direction_lines``, ``c_max``,
+    ``root_tolerance``, ``max_iterations``, ``confidence_level``, ``max_missing_fraction``. The result
     depends only on ``seed``, the method and its options (ttbpipe.streams, RARE_EVENT).
     """
     if method not in METHODS:

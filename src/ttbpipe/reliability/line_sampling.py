@@ -50,9 +50,9 @@ Determinism: line i is drawn from ``SeedSequence([seed, RARE_EVENT, RARE_EVENT_L
 (ttbpipe.streams); the direction's subset simulation from its own stream with the same seed.
 
 Why not a library: UQpy (4.x) and OpenTURNS ship subset simulation and (OpenTURNS) directional
-sampling, but neither takes the important direction from subset simulation's own chains nor
-returns per-line results for a cluster-robust check; the estimator is twenty lines around
-scipy's normal distribution (docs/reliability.md section 12).
+sampling, but neither fits the important direction through subset simulation's evaluated
+points nor stops on a failure domain that no single direction reaches; the estimator itself is
+the mean of Phi(-c_i) over vectorised root searches (docs/reliability.md section 12).
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ import numpy as np
 from scipy import stats
 
 from .. import streams
-from .monte_carlo import evaluate_limit_state
+from .monte_carlo import evaluate_limit_state, indexed_points
 from .result import FailureProbability, lognormal_interval
 from .subset import SubsetSettings, SubsetSimulation
 
@@ -75,13 +75,7 @@ log = logging.getLogger(__name__)
 
 def line_points(seed: int, n_dims: int, indices: np.ndarray) -> np.ndarray:
     """Standard-normal points of the lines with the given indices, shape (len, n_dims)."""
-    indices = np.asarray(indices, dtype=np.int64)
-    out = np.empty((indices.size, int(n_dims)))
-    for row, index in enumerate(indices):
-        seq = np.random.SeedSequence([int(seed), streams.RARE_EVENT, streams.RARE_EVENT_LINE,
-                                      int(index)])
-        out[row] = np.random.default_rng(seq).standard_normal(int(n_dims))
-    return out
+    return indexed_points(seed, streams.RARE_EVENT_LINE, n_dims, indices)
 
 
 class _Recorded:
@@ -126,10 +120,10 @@ def _regression_gradient(points: np.ndarray, values: np.ndarray) -> np.ndarray:
             continue
         gcv = n * resid / (n - dof) ** 2
         if best is None or gcv < best[0]:
-            best = (gcv, lam, shrink)
+            best = (gcv, shrink)
     if best is None:
         raise RuntimeError("line sampling: too few points to fit the direction")
-    _, _, shrink = best
+    _, shrink = best
     with np.errstate(divide="ignore", invalid="ignore"):
         coef = np.where(s_ > 1e-12 * s_[0], shrink * uty / s_, 0.0)
     return vt.T @ coef
@@ -271,6 +265,11 @@ def _roots(g: Callable[[np.ndarray], np.ndarray], base: np.ndarray, alpha: np.nd
     return c, status, evaluations
 
 
+def _start(c_start: float, c_max: float) -> float:
+    """The root search's first point, kept a step inside [-c_max, c_max]."""
+    return float(np.clip(c_start, -c_max + 1.0, c_max - 1.0))
+
+
 def line_sampling(g: Callable[[np.ndarray], np.ndarray], n_dims: int, *, seed: int = 0,
                   n_lines: int = 200, direction: Any = "subset",
                   direction_n_per_level: int = 500, direction_levels: int = 4,
@@ -304,8 +303,8 @@ def line_sampling(g: Callable[[np.ndarray], np.ndarray], n_dims: int, *, seed: i
             recording = _Recorded(g, "line sampling, direction lines")
             z = line_points(seed, n_dims, np.arange(first))
             c_pilot, _, used = _roots(recording, z - np.outer(z @ alpha, alpha), alpha,
-                                      float(np.clip(c_start, -c_max + 1.0, c_max - 1.0)),
-                                      float(c_max), float(root_tolerance), int(max_iterations))
+                                      _start(c_start, c_max), float(c_max),
+                                      float(root_tolerance), int(max_iterations))
             spent += used
             pilot_u, pilot_g = recording.arrays()
             seen_u, seen_g = np.concatenate([seen_u, pilot_u]), np.concatenate([seen_g, pilot_g])
@@ -328,10 +327,9 @@ def line_sampling(g: Callable[[np.ndarray], np.ndarray], n_dims: int, *, seed: i
             raise ValueError(f"direction must be a finite, non-zero array of {n_dims} values")
         alpha = alpha / np.linalg.norm(alpha)
         c_start, source = 3.0, "direction given"
-    c_start = float(np.clip(c_start, -c_max + 1.0, c_max - 1.0))
     z = line_points(seed, n_dims, np.arange(first, first + n_lines))
     base = z - np.outer(z @ alpha, alpha)
-    c, status, evaluations = _roots(g, base, alpha, c_start, float(c_max),
+    c, status, evaluations = _roots(g, base, alpha, _start(c_start, c_max), float(c_max),
                                     float(root_tolerance), int(max_iterations))
     reversed_lines = status == 2
     if reversed_lines.any():

@@ -16,18 +16,24 @@ import numpy as np
 from .. import streams
 from .result import FailureProbability
 
-__all__ = ["monte_carlo_points", "monte_carlo"]
+__all__ = ["indexed_points", "monte_carlo_points", "monte_carlo"]
 
 
-def monte_carlo_points(seed: int, n_dims: int, indices: np.ndarray) -> np.ndarray:
-    """Standard-normal points with the given indices, shape ``(len(indices), n_dims)``."""
+def indexed_points(seed: int, estimator: int, n_dims: int, indices: np.ndarray) -> np.ndarray:
+    """Standard-normal points with the given indices, shape ``(len(indices), n_dims)``: point i
+    of ``estimator`` (a ``streams.RARE_EVENT_*`` word) from ``SeedSequence([seed, RARE_EVENT,
+    estimator, i])``, so that a point never depends on how the caller batches them."""
     indices = np.asarray(indices, dtype=np.int64)
     out = np.empty((indices.size, int(n_dims)))
     for row, index in enumerate(indices):
-        seq = np.random.SeedSequence([int(seed), streams.RARE_EVENT,
-                                      streams.RARE_EVENT_MONTE_CARLO, int(index)])
+        seq = np.random.SeedSequence([int(seed), streams.RARE_EVENT, int(estimator), int(index)])
         out[row] = np.random.default_rng(seq).standard_normal(int(n_dims))
     return out
+
+
+def monte_carlo_points(seed: int, n_dims: int, indices: np.ndarray) -> np.ndarray:
+    """Plain Monte Carlo's points with the given indices (:func:`indexed_points`)."""
+    return indexed_points(seed, streams.RARE_EVENT_MONTE_CARLO, n_dims, indices)
 
 
 def evaluate_limit_state(g: Callable[[np.ndarray], np.ndarray], points: np.ndarray,
