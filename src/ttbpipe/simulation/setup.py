@@ -417,8 +417,8 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
             second["irr"] = build_irregularity(irr_cfg if shared else second["irregularity"],
                                                lo, hi, second["x_lead0"], profile=source,
                                                direction=second["direction"])
-        # the layout's curves for each track of a double-track deck: the same radius and cant
-        # (the tracks' radii differ by their spacing, e.g. 5 m in 2000 m: 0.25 % on V^2/R)
+        # both tracks of a double-track deck take the layout's radius and cant (each track's
+        # own radius differs by half the spacing: 2.5 m in 4000 m, 0.06 % of V^2/R)
         trains.append(StaticTrain(second["model"], second["geom"], second["speed"],
                                   second["irr"], second["direction"] * second["x_lead0"]
                                   + second["model"].wheelset_x, 2 * second["track_index"],
