@@ -1,14 +1,11 @@
 """A field per rail for the rail (C1) and rail-pad (C2) groups (fields.left_right_correlation)."""
 
 import copy
-import os
 
 import numpy as np
 import pytest
 
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-
-from ttbpipe.fields.sampling import FieldSampler, sample_generator  # noqa: E402
+from ttbpipe.fields.sampling import FieldSampler, sample_generator
 
 R_RAIL = [[1.0, 0.7, 0.7, 0.7], [0.7, 1.0, 0.8, 0.8], [0.7, 0.8, 1.0, 0.9], [0.7, 0.8, 0.9, 1.0]]
 FIELDS = {

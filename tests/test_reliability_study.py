@@ -12,14 +12,11 @@ references); on the coupled model against Monte Carlo: docs/reliability.md §11.
 from __future__ import annotations
 
 import copy
-import os
 
 import pandas as pd
 import pytest
 
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-
-from ttbpipe.reliability.study import RESULT_COLUMNS, run_subset_limit  # noqa: E402
+from ttbpipe.reliability.study import RESULT_COLUMNS, run_subset_limit
 
 CONFIG = {
     "study": {"seed": 3, "scenarios": {"subset": {"enabled": True,

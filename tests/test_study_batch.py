@@ -21,14 +21,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-
-from ttbpipe.fields import load_field_factors, sample_study  # noqa: E402
-from ttbpipe.io import read_provenance  # noqa: E402
-from ttbpipe.stats.streaming import read_extremes  # noqa: E402
-from ttbpipe.study import samples as study_samples  # noqa: E402
-from ttbpipe.study.batch import batch_paths, simulate_design  # noqa: E402
-from ttbpipe.study.design import build_design  # noqa: E402
+from ttbpipe.fields import load_field_factors, sample_study
+from ttbpipe.io import read_provenance
+from ttbpipe.stats.streaming import read_extremes
+from ttbpipe.study import samples as study_samples
+from ttbpipe.study.batch import batch_paths, simulate_design
+from ttbpipe.study.design import build_design
 
 FIELDS = {
     "method": "kle", "kernel": "exponential", "correlation_length_m": 10.0,

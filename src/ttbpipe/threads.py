@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import os
 from typing import Any, Callable, Iterator, TypeVar
 
 #: Threads of the numerical work of one sample (BLAS, OpenMP, numba).
@@ -30,6 +31,22 @@ WORKER_ENV = {"NUMBA_NUM_THREADS": str(SAMPLE_THREADS), "OMP_NUM_THREADS": str(S
               "OPENBLAS_NUM_THREADS": str(SAMPLE_THREADS), "MKL_NUM_THREADS": str(SAMPLE_THREADS)}
 
 F = TypeVar("F", bound=Callable[..., Any])
+
+
+def apply_worker_environment() -> None:
+    """Put :data:`WORKER_ENV` into ``os.environ`` of this process (a worker's initializer).
+
+    numba reads ``NUMBA_NUM_THREADS`` when it is imported and re-reads it at every later
+    compilation, refusing a different value once its thread pool runs ("Cannot set
+    NUMBA_NUM_THREADS to a different value once the threads have been launched"). A forked
+    worker inherits numba, and its pool, from the parent, so there the variable is left as numba
+    has it; :func:`single_threaded` sets numba's thread count at run time instead."""
+    import sys
+
+    for name, value in WORKER_ENV.items():
+        if name == "NUMBA_NUM_THREADS" and "numba" in sys.modules:
+            continue
+        os.environ[name] = value
 
 
 @contextlib.contextmanager

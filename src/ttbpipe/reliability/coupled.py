@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import copy
 import logging
-import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Protocol
@@ -23,7 +22,7 @@ from typing import Any, Callable, Mapping, Protocol
 import numpy as np
 import pandas as pd
 
-from ..threads import WORKER_ENV, pinned
+from ..threads import apply_worker_environment, pinned
 
 log = logging.getLogger(__name__)
 
@@ -53,7 +52,7 @@ _WORKER: dict[str, Any] = {}
 
 
 def _init_worker(case, input_map) -> None:
-    os.environ.update(WORKER_ENV)
+    apply_worker_environment()
     _WORKER.update(case=case, input_map=input_map)
 
 

@@ -1,0 +1,16 @@
+"""Session set-up shared by every test module.
+
+The samples' numerical work runs single-threaded (ttbpipe.threads). numba reads
+NUMBA_NUM_THREADS when it is imported and again at every later compilation, and refuses a
+different value once its thread pool runs: a module that set the variable after another had
+imported numba made every later compilation in that pytest worker fail. So the worker
+environment goes in here, before any test module imports numba, numpy or scipy; a value the
+caller set is kept.
+"""
+
+import os
+
+from ttbpipe.threads import WORKER_ENV
+
+for _name, _value in WORKER_ENV.items():
+    os.environ.setdefault(_name, _value)
