@@ -80,16 +80,17 @@ def test_linear_limit_state_in_2000_dimensions():
     points: its plane (ridge regression, penalty by generalised cross-validation) is not the
     exact normal (cosine 0.96); refined with the first 100 lines' points it is closer (measured
     0.984-0.991), and the estimate scatters a little (c.o.v. observed 0.055 over 20 seeds,
-    reported 0.063, coverage 0.95; benchmarks/line_sampling_table.py). Three seeds: the exact
-    value inside each interval, the reported c.o.v. <= 0.3, <= 3500 evaluations, cosine > 0.9."""
+    reported 0.063, coverage 0.95; benchmarks/line_sampling_table.py). One seed (the fit's SVD
+    of about 2250 x 2000 takes tens of seconds on a loaded 2-core machine; the spread over seeds
+    is the table's): the exact value inside the interval, the reported c.o.v. <= 0.3, <= 3500
+    evaluations, cosine > 0.9."""
     g, a = linear_limit_state(4.75, 2000)
     exact = stats.norm.sf(4.75)
-    for seed in range(3):
-        result = estimate_failure_probability(g, 2000, method="line_sampling", seed=seed)
-        assert result.covers(exact), result
-        assert result.cov <= 0.3
-        assert result.n_evaluations <= 3500
-        assert float(result.details["direction"] @ a) > 0.9
+    result = estimate_failure_probability(g, 2000, method="line_sampling", seed=0)
+    assert result.covers(exact), result
+    assert result.cov <= 0.3
+    assert result.n_evaluations <= 3500
+    assert float(result.details["direction"] @ a) > 0.9
 
 
 def test_a_line_depends_only_on_the_seed_and_its_index():
