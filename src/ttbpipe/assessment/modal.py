@@ -87,10 +87,10 @@ def analyse(model) -> tuple[SpanFrequencies, ...]:
     fixed = model.fixed.copy()
     fixed[ballast] = True
     member = dataclasses.replace(model, fixed=fixed)
-    mass = member.matrices()[0].tocsr()
+    matrices = member.matrices()          # assembled once for every eigen-solve below
     n_spans = len(member.spans)
 
-    low = _clusters(member, mass, sigma_hz=0.0, n_modes=8 * n_spans + 10, orders=(1, 2))
+    low = _clusters(member, matrices, sigma_hz=0.0, n_modes=8 * n_spans + 10, orders=(1, 2))
     estimates = {}
     for s, red in enumerate(member.spans):
         bare = np.asarray(red.mode_frequencies_hz[0], dtype=float)
@@ -110,7 +110,8 @@ def analyse(model) -> tuple[SpanFrequencies, ...]:
             break
         # spans of equal length share a search: one window around the median estimate
         sigma = float(np.median([estimates[s] for s in todo]))
-        found = _clusters(member, mass, sigma_hz=sigma, n_modes=n_modes, orders=(3,), spans=todo)
+        found = _clusters(member, matrices, sigma_hz=sigma, n_modes=n_modes, orders=(3,),
+                          spans=todo)
         for s in todo:
             third[s] = found[(s, 3)]
     out = []
@@ -131,11 +132,12 @@ def _half_waves(w: np.ndarray) -> int:
     return 1 + int(np.count_nonzero(np.diff(signs) != 0))
 
 
-def _clusters(member, mass, sigma_hz: float, n_modes: int, orders, spans=None) -> dict:
+def _clusters(member, matrices, sigma_hz: float, n_modes: int, orders, spans=None) -> dict:
     """{(span index, order): energy-weighted frequency of the complete cluster, or None}."""
     from ..structure.modal import modal_analysis
 
-    res = modal_analysis(member, n_modes=n_modes, sigma_hz=sigma_hz)
+    res = modal_analysis(member, n_modes=n_modes, sigma_hz=sigma_hz, matrices=matrices)
+    mass = matrices[0].tocsr()
     freqs = res.frequencies_hz
     vertical = res.shares["girder_vertical"] >= MIN_VERTICAL_SHARE
     total = np.einsum("ij,ij->j", res.shapes, mass @ res.shapes)
