@@ -28,7 +28,7 @@ import pytest
 
 from ttbpipe.vehicle.contact import (COL_A, COL_DELTA, COL_DZ, COL_E, COL_G, build_geometry,
                                      hertz_constant, hertz_ellipse_mn, wheel_contact,
-                                     wheel_contact_points)
+                                     wheel_contact_points, zone_columns)
 from ttbpipe.vehicle.kernels import contact_forces
 from ttbpipe.vehicle.parameters import ContactParameters
 from ttbpipe.vehicle.profile_contact import profile_pair, profile_table
@@ -191,7 +191,7 @@ def _climb_path(geom, yaw, spin, load=7.0e4, y_mm=np.arange(4.0, 9.6, 0.05)):
         r, f, wheel, q, v = residual(y, x)
         kin = {"y": q[0], "z": q[1], "roll": q[2], "yaw": q[4], "vpitch": v[3]}
         out, normals = wheel_contact_points(1.0, geom, speed, kin, {}, points=True)
-        delta = float(np.interp(y, geom.zones[0, :, 0], geom.zones[0, :, COL_DELTA]))
+        delta = float(zone_columns(geom, y, yaw)[0, COL_DELTA])   # the flange's, at this yaw
         # creep force in the contact plane, across the rolling direction (force_y, force_z of
         # the left wheel: -N sin d + F cos d, N cos d + F sin d)
         lateral = out[1] * np.cos(delta) + out[2] * np.sin(delta)
@@ -253,7 +253,8 @@ def test_quasi_static_flange_climb_with_polach(s1002):
     at small angles of attack), H has an interior maximum as with the default law, and a
     larger angle of attack (20 mrad, more lateral creepage up the flank) does not raise the
     climbing Q/P. Regression values of this model (not references): Q/P 1.6154 at 1 mrad and
-    1.6141 at 20 mrad, within 1e-3 -- with Polach the climb does not approach Nadal at 10-20
+    1.6127 at 20 mrad, within 1e-3 (1.6141 with the contact tables at zero yaw: the flange's
+    contact on the yawed wheel's trace line lowers it by 0.09 %) -- with Polach the climb does not approach Nadal at 10-20
     mrad as the literature finds with Kalker's exact theory (docs/contact_geometry.md section
     7, benchmarks/flange_climb_creep_laws.py: FASTSIM's lateral force on the same flank rises
     from 0.64 to 0.87 mu N over 0-20 mrad, Polach's stays at 0.42-0.43)."""
@@ -269,7 +270,7 @@ def test_quasi_static_flange_climb_with_polach(s1002):
     assert climbs[0.001] > 1.1 * limit
     assert climbs[0.020] <= climbs[0.001]
     assert climbs[0.001] == pytest.approx(1.6154, abs=1e-3)
-    assert climbs[0.020] == pytest.approx(1.6141, abs=1e-3)
+    assert climbs[0.020] == pytest.approx(1.6127, abs=1e-3)
 
 
 def test_vertical_loads_twist_the_rail_about_its_shear_centre():

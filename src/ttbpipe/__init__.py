@@ -47,3 +47,16 @@ def code_version() -> str:
 
 
 _CODE_VERSION: str | None = None
+
+
+def _refresh_kernel_cache() -> None:
+    # numba does not see a change in another module than a kernel's own (ttbpipe.kernel_cache)
+    try:
+        from .kernel_cache import refresh
+
+        refresh()
+    except OSError:
+        pass
+
+
+_refresh_kernel_cache()

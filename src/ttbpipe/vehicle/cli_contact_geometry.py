@@ -45,6 +45,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--y-max-mm", type=float, default=10.0,
                         help="largest lateral displacement (mm); the table runs from -y_max to y_max")
     parser.add_argument("--step-mm", type=float, default=0.1, help="lateral displacement step (mm)")
+    parser.add_argument("--yaw-mrad", type=float, default=0.0,
+                        help="wheelset yaw relative to the track (mrad): the contact on the yawed "
+                             "wheels' trace lines, columns contact_lead_*_mm (EN 15302's conicity "
+                             "is defined at zero yaw)")
     parser.add_argument("--two-point-tol-mm", type=float, default=0.05,
                         help="gap within which a second local gap minimum is a second contact (mm)")
     parser.add_argument("--smoothing-mm", type=float, default=0.0,
@@ -86,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
                            smoothing=args.smoothing_mm * MM)
         n = int(round(args.y_max_mm / args.step_mm))
         y = np.arange(-n, n + 1) * args.step_mm * MM
-        table = pair.solve(y)
+        table = pair.solve(y, yaw=args.yaw_mrad * 1e-3)
         yt = table["lateral_displacement_mm"].to_numpy() * MM
         dr = table["rolling_radius_difference_mm"].to_numpy() * MM
         conicity = {}
@@ -102,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
               "gauge_mm": args.gauge_mm, "flange_back_mm": args.flange_back_mm,
               "nominal_radius_mm": args.nominal_radius_mm, "y_max_mm": args.y_max_mm,
               "step_mm": args.step_mm, "two_point_tol_mm": args.two_point_tol_mm,
-              "smoothing_mm": args.smoothing_mm}
+              "smoothing_mm": args.smoothing_mm, "yaw_mrad": args.yaw_mrad}
     centred = table.attrs.get("centred", {})
     summary = {"equivalent_conicity": conicity,
                "centred_rolling_radius_left_mm": centred.get("rolling_radius_left_mm"),

@@ -155,16 +155,18 @@ N_COLS = 11
 
 #: Two-point (zone) tables: the one-point columns, then the Hertz flexibility G of the row
 #: (m/N^(2/3)), the contact point's lateral distance from the wheelset centre a (m, zero roll)
-#: and from the rail's crown point e (m, track frame, towards the field side).
-COL_G, COL_A, COL_E = 11, 12, 13
-N_ZCOLS = 14
+#: and from the rail's crown point e (m, track frame, towards the field side), the square of
+#: the wheelset yaw of the row's layer (rad^2) and the lead of the point ahead of the axle (m,
+#: track x, for positive yaw of the left wheel; odd in yaw).
+COL_G, COL_A, COL_E, COL_YAW2, COL_LEAD = 11, 12, 13, 14, 15
+N_ZCOLS = 16
 #: Per-wheel results of :func:`_wheel_contact_points`: the seven of :func:`_wheel_contact`, then
 #: the generalised moments of the wheel's contact forces about the wheelset centre (roll, spin,
 #: yaw; N m) and the moment of its vertical forces about the rail's shear-centre line (N m,
 #: about x).
 N_POINT_OUT = 11
 #: Columns of the two-point kernel's per-point scratch ``pts`` (:func:`_wheel_contact_points`).
-N_PTS_COLS = 12
+N_PTS_COLS = 13
 #: Conformal contact: a lateral relative curvature B below this fraction of the rolling-direction
 #: curvature A (wheel hollow nearly as tight as the rail head, e.g. S1002's flange root on the
 #: gauge corner of 60E1) is held at it, where Hertz's half-space assumption fails anyway.
@@ -191,6 +193,9 @@ class ContactGeometry:
     rail_head_height: float
     description: str
     zones: np.ndarray | None = None   # (n_zones, n, N_ZCOLS): two-point contact (flange first)
+    #                                   at zero yaw
+    zone_layers: np.ndarray | None = None  # (n_zones, n_yaw, n, N_ZCOLS): the same over yaw
+    #                                   layers from zero yaw (layer 0 = ``zones``)
     flange_cut: float | None = None   # wheel profile coordinate of the tread/flange cut (m)
     rail_cant: float = 0.0            # sin of the rail inclination (two-point: the shear centre
     #                                   lies rail_head_height sin(beta) field-side of the crown)
@@ -198,10 +203,13 @@ class ContactGeometry:
     polach: tuple = (1.0, 1.0, 1.0, 0.0)  # Polach's kA, kS, A = mu_inf/mu0, B (s/m)
 
     def zone_array(self) -> np.ndarray:
-        """The zone tables for the kernels: (0, 2, N_ZCOLS) when there are none (one point)."""
+        """The zone tables for the kernels, (n_zones, n_yaw, n, N_ZCOLS): the yaw layers, or the
+        zero-yaw tables as one layer; (0, 1, 2, N_ZCOLS) when there are none (one point)."""
+        if self.zone_layers is not None:
+            return self.zone_layers
         if self.zones is None:
-            return np.zeros((0, 2, N_ZCOLS))
-        return self.zones
+            return np.zeros((0, 1, 2, N_ZCOLS))
+        return np.ascontiguousarray(self.zones[:, None])
 
     @property
     def y_grid(self) -> np.ndarray:
@@ -385,29 +393,72 @@ def profiles_geometry(p: ContactParameters) -> ContactGeometry:
 def zone_geometry(p: ContactParameters, one: ContactGeometry | None = None) -> ContactGeometry:
     """Two-point contact geometry of a profile pair: the one-point geometry of
     :func:`profiles_geometry` (its table serves the step limits, the linearised vehicle and the
-    conicity) with the tread and flange zone tables (:func:`ttbpipe.vehicle.profile_contact.zone_tables`).
+    conicity) with the tread and flange zone tables (:func:`ttbpipe.vehicle.profile_contact.zone_tables`)
+    over ``yaw_layers`` layers of wheelset yaw, uniform from 0 to ``yaw_max_rad`` (the contact
+    on the wheel's trace line; the kernel interpolates linearly in yaw^2 between layers, exact
+    for the leading quadratic dependence of the even quantities, and holds the last layer
+    beyond it). Measured on S1002/60E1 (tests/test_contact_yaw.py): with 5 mrad between layers
+    the contact's gap change is interpolated to 0.4 um at 7 mrad and 4 um at 27 mrad, against
+    a yaw effect of 40 and 600 um in flange contact; layers uniform in yaw^2 (0, 18, 25 ...
+    mrad) missed by 3.5 um at 7 mrad, the flange's gap change not being quadratic in yaw there.
 
     Per zone row: Hertz ellipse and Kalker coefficients from the relative curvatures
     A = 1/(2 R_x), R_x = r / cos(delta_w) the wheel's rolling-direction principal radius (the
     rail is straight), B = (1/R_wheel + 1/R_rail)/2 (conformal rows held at
     :data:`CONFORMAL_CURVATURE_RATIO` A); the Hertz flexibility G from those curvatures
     (:func:`hertz_constant`; ``hertz_law`` auto or hertz) or Zhai's law of the tread (worn, cone).
-    The scalar ``hertz_g`` (static start and step limits) becomes the smallest G of a row whose
-    zone lies within :data:`REACH_GAP_M` of the contact (the stiffest contact the wheel meets
-    with a substantial share of its load).
+    The scalar ``hertz_g`` (static start and step limits) becomes the smallest G of a zero-yaw
+    row whose zone lies within :data:`REACH_GAP_M` of the contact (the stiffest contact the
+    wheel meets with a substantial share of its load).
     """
     import dataclasses
 
-    from .profile_contact import zone_tables
+    from .contact_geometry import parse_inclination
+    from .profile_contact import profile_pair, zone_tables
 
     if p.hertz_law not in ("auto", "hertz", "worn", "cone"):
         raise ValueError(f"train.contact.hertz_law: {p.hertz_law!r}; expected auto | hertz | worn | cone")
+    n_yaw = int(p.yaw_layers)
+    if n_yaw < 1 or (n_yaw > 1 and not 0.0 < float(p.yaw_max_rad) <= 0.1):
+        raise ValueError(f"train.contact.yaw_layers, yaw_max_rad: {p.yaw_layers}, {p.yaw_max_rad}; "
+                         "expected at least one layer and a largest yaw in (0, 0.1] rad")
     one = profiles_geometry(p) if one is None else one
-    raw, cut, _ = zone_tables(p)
-    n_z, n, _ = raw.shape
-    zones = np.zeros((n_z, n, N_ZCOLS))
+    pair = profile_pair(p)
+    raw, cut, _ = zone_tables(p, pair=pair)
+    yaws = float(p.yaw_max_rad) * np.arange(n_yaw) / max(n_yaw - 1, 1)
     curvature_law = p.hertz_law in ("auto", "hertz")
     zhai = hertz_g(p.wheel_radius, "cone" if p.hertz_law == "cone" else "worn")
+    layers = []
+    for j, yaw in enumerate(yaws):
+        layer_raw = raw if j == 0 else zone_tables(p, pair=pair, yaw=float(yaw), split=cut)[0]
+        layer, reach, held = _zone_layer(layer_raw, p, curvature_law, zhai, float(yaw))
+        if j == 0:
+            zones, reach0, held0 = layer, reach, held
+        layers.append(layer)
+    if held0:
+        log.info("two-point contact: %d table rows near contact are conformal (B < %.2g A) and "
+                 "held at that ratio", held0, CONFORMAL_CURVATURE_RATIO)
+    g_min = float(zones[:, :, COL_G][reach0].min())
+    law = "Hertz from the curvatures" if curvature_law else f"Zhai's {p.hertz_law} law"
+    where = ("no tread-flange jump: one zone" if cut is None
+             else f"tread and flange cut at {1e3 * cut:.2f} mm on the wheel")
+    yaw_text = (f"{n_yaw} yaw layers to {1e3 * yaws[-1]:g} mrad" if n_yaw > 1
+                else "contact at zero yaw")
+    return dataclasses.replace(one, zones=np.ascontiguousarray(zones),
+                               zone_layers=np.ascontiguousarray(np.stack(layers, axis=1)),
+                               flange_cut=cut, hertz_g=g_min,
+                               rail_cant=float(np.sin(np.arctan(parse_inclination(p.rail_inclination)))),
+                               description=f"{one.description}; two-point contact ({where}; {law}; "
+                                           f"{yaw_text})")
+
+
+def _zone_layer(raw: np.ndarray, p: ContactParameters, curvature_law: bool, zhai: float,
+                yaw: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """One yaw layer of the kernels' zone tables from :func:`zone_tables`' columns: (tables
+    (n_zones, n, N_ZCOLS), the rows within :data:`REACH_GAP_M` of the contact, how many of
+    those were held conformal)."""
+    n_z, n, _ = raw.shape
+    zones = np.zeros((n_z, n, N_ZCOLS))
     held = 0
     reach = raw[:, :, 2] >= raw[:, :, 2].max(axis=0) - REACH_GAP_M
     for k in range(n_z):
@@ -417,6 +468,8 @@ def zone_geometry(p: ContactParameters, one: ContactGeometry | None = None) -> C
         zones[k, :, COL_DELTA] = raw[k, :, 3]
         zones[k, :, COL_A] = raw[k, :, 6]
         zones[k, :, COL_E] = raw[k, :, 7]
+        zones[k, :, COL_YAW2] = yaw * yaw
+        zones[k, :, COL_LEAD] = raw[k, :, 9]
         for i in range(n):
             curv_a = 0.5 / raw[k, i, 8]
             curv_b = 0.5 * (1.0 / raw[k, i, 5] + 1.0 / raw[k, i, 4])
@@ -428,19 +481,7 @@ def zone_geometry(p: ContactParameters, one: ContactGeometry | None = None) -> C
             zones[k, i, COL_C11:COL_C33 + 1] = kalker_coefficients(m / n_)
             zones[k, i, COL_G] = (_hertz_constant_mn(m, n_, curv_a + curv_b, p.youngs_modulus,
                                                      p.poisson) if curvature_law else zhai)
-    if held:
-        log.info("two-point contact: %d table rows near contact are conformal (B < %.2g A) and "
-                 "held at that ratio", held, CONFORMAL_CURVATURE_RATIO)
-    g_min = float(zones[:, :, COL_G][reach].min())
-    law = "Hertz from the curvatures" if curvature_law else f"Zhai's {p.hertz_law} law"
-    where = ("no tread-flange jump: one zone" if cut is None
-             else f"tread and flange cut at {1e3 * cut:.2f} mm on the wheel")
-    from .contact_geometry import parse_inclination
-
-    return dataclasses.replace(one, zones=np.ascontiguousarray(zones), flange_cut=cut,
-                               hertz_g=g_min,
-                               rail_cant=float(np.sin(np.arctan(parse_inclination(p.rail_inclination)))),
-                               description=f"{one.description}; two-point contact ({where}; {law})")
+    return zones, reach, held
 
 
 #: Profile-pair geometries built in this process, by their parameters (a study builds the same
@@ -754,6 +795,16 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
 
 
 @njit(cache=True)
+def _lerp2(zk: np.ndarray, j: int, j1: int, wy: float, i: int, w: float, c: int) -> float:
+    """Column ``c`` of one zone's tables (n_yaw, n, N_ZCOLS) at weight ``w`` between rows i and
+    i + 1 and weight ``wy`` between yaw layers j and j1 (bilinear)."""
+    lo = zk[j, i, c] * (1.0 - w) + zk[j, i + 1, c] * w
+    if wy == 0.0:
+        return lo
+    return lo * (1.0 - wy) + (zk[j1, i, c] * (1.0 - w) + zk[j1, i + 1, c] * w) * wy
+
+
+@njit(cache=True)
 def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, speed: float,
                           wheelset, rail, pts: np.ndarray, out: np.ndarray,
                           creep_prev: np.ndarray, creep_relax: float) -> None:
@@ -770,7 +821,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
             + s (z_w' + s a_k roll_w' - z_rail' - s l_k theta_rail') sin d_k]/V,
     xi_sp = yaw_w' cos d_k / V - s sin d_k / r0,
 
-    with l_k = e_k - h sin(beta) the point's lateral distance (towards the field side) from the
+    (plus yaw_w' x_k in xi_y) with l_k = e_k - h sin(beta) the point's lateral distance (towards the field side) from the
     rail's shear-centre line: e_k from the crown point (:data:`COL_E`), the shear centre h
     (``rail_head_height``, scalar 9) below the crown on the rail's axis inclined by beta
     (``rail_cant`` = sin beta, scalar 10). ``rail`` = (z, y, dz/dt, dy/dt[, theta, dtheta/dt]):
@@ -778,10 +829,15 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     the contact: the rail's vertical motion at the point follows it (seed paper eq. 31: the
     vertical load at l_h twists the rail; its transpose in the kinematics).
 
+    Yaw: every column is interpolated bilinearly in (y_rel, yaw_w^2) between the zone tables'
+    yaw layers (:func:`zone_geometry`: the contact on the yawed wheel's trace line; the last
+    layer held beyond the largest yaw), and the point lies x_k ahead of the axle (:data:`COL_LEAD`,
+    odd in yaw).
+
     Writes ``out`` (:data:`N_POINT_OUT`): the wheel's summed [F_x, F_y, F_z, M_spin, N], y_rel,
     the largest penetration, then the generalised moments about the wheelset centre of the
-    points' forces at (0, s a_k, -r_k): roll sum(s a_k F_z + r_k F_y), spin sum(-r_k F_x), yaw
-    sum(-s a_k F_x + M_k cos d_k), and sum(s l_k F_z), the moment about x of the vertical
+    points' forces at (x_k, s a_k, -r_k): roll sum(s a_k F_z + r_k F_y), spin sum(-r_k F_x), yaw
+    sum(-s a_k F_x + x_k F_y + M_k cos d_k), and sum(s l_k F_z), the moment about x of the vertical
     forces on the wheel about the rail's shear-centre line (the rail carries its negative).
 
     Semi-implicit lateral creep (``creep_relax`` > 0, as :func:`_wheel_contact`): the points'
@@ -801,8 +857,9 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     rail_z, rail_y, rail_vz, rail_vy, rail_roll, rail_vroll = rail
     y_rel = ws_y - rail_y
     n_z = zones.shape[0]
-    n = zones.shape[1]
-    i, w = _grid_cell(zones[0, 0, 0], zones[0, 1, 0], n, side * y_rel)
+    n_yaw = zones.shape[1]
+    n = zones.shape[2]
+    i, w = _grid_cell(zones[0, 0, 0, 0], zones[0, 0, 1, 0], n, side * y_rel)
     # r and dz extrapolate linearly beyond the table; the other columns hold their end values
     if w < 0.0:
         ih, wh = 0, 0.0
@@ -810,43 +867,59 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         ih, wh = n - 2, 1.0
     else:
         ih, wh = i, w
+    # yaw layers: linear in yaw^2 between two layers (the even quantities' leading term), the
+    # last layer held beyond the table
+    if n_yaw > 1:
+        yaw2 = ws_yaw * ws_yaw
+        j = 0
+        while j < n_yaw - 2 and zones[0, j + 1, 0, COL_YAW2] < yaw2:
+            j += 1
+        j1 = j + 1
+        wy = (yaw2 - zones[0, j, 0, COL_YAW2]) / (zones[0, j1, 0, COL_YAW2] - zones[0, j, 0, COL_YAW2])
+        if wy > 1.0:
+            wy = 1.0
+    else:
+        j, j1, wy = 0, 0, 0.0
+    # the lead is odd in yaw; the right wheel's mirrored axes see -yaw
+    lead_sign = 1.0 if side * ws_yaw >= 0.0 else -1.0
     f22_sum = 0.0
     pen_max = -np.inf
     for k in range(n_z):
         zk = zones[k]
-        a = zk[ih, COL_A] * (1.0 - wh) + zk[ih + 1, COL_A] * wh
-        lever = zk[ih, COL_E] * (1.0 - wh) + zk[ih + 1, COL_E] * wh - axis
+        a = _lerp2(zk, j, j1, wy, ih, wh, COL_A)
+        lever = _lerp2(zk, j, j1, wy, ih, wh, COL_E) - axis
         pen = (rail_z + side * lever * rail_roll - (ws_z + side * a * ws_roll)
-               + zk[i, COL_DZ] * (1.0 - w) + zk[i + 1, COL_DZ] * w)
+               + _lerp2(zk, j, j1, wy, i, w, COL_DZ))
         if pen > pen_max:
             pen_max = pen
         pts[k, 0] = 0.0
         if pen <= 0.0:
             continue
-        delta = zk[ih, COL_DELTA] * (1.0 - wh) + zk[ih + 1, COL_DELTA] * wh
-        g_k = zk[ih, COL_G] * (1.0 - wh) + zk[ih + 1, COL_G] * wh
+        delta = _lerp2(zk, j, j1, wy, ih, wh, COL_DELTA)
+        g_k = _lerp2(zk, j, j1, wy, ih, wh, COL_G)
         cos_d = np.cos(delta)
         normal = _hertz_force(pen * cos_d, g_k)
         if normal <= 0.0:
             continue
-        absum = zk[ih, COL_ABSUM] * (1.0 - wh) + zk[ih + 1, COL_ABSUM] * wh
+        absum = _lerp2(zk, j, j1, wy, ih, wh, COL_ABSUM)
         c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * absum)) ** (1.0 / 3.0)
-        m_k = zk[ih, COL_M] * (1.0 - wh) + zk[ih + 1, COL_M] * wh
-        n_k = zk[ih, COL_N] * (1.0 - wh) + zk[ih + 1, COL_N] * wh
+        m_k = _lerp2(zk, j, j1, wy, ih, wh, COL_M)
+        n_k = _lerp2(zk, j, j1, wy, ih, wh, COL_N)
         ab = m_k * n_k * c * c
         pts[k, 10] = m_k * c
         pts[k, 11] = n_k * c
-        f22 = g_shear * ab * (zk[ih, COL_C22] * (1.0 - wh) + zk[ih + 1, COL_C22] * wh)
+        f22 = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C22)
         pts[k, 0] = normal
-        pts[k, 1] = zk[i, COL_R] * (1.0 - w) + zk[i + 1, COL_R] * w
+        pts[k, 1] = _lerp2(zk, j, j1, wy, i, w, COL_R)
         pts[k, 2] = delta
         pts[k, 3] = a
         pts[k, 4] = lever
-        pts[k, 5] = g_shear * ab * (zk[ih, COL_C11] * (1.0 - wh) + zk[ih + 1, COL_C11] * wh)
+        pts[k, 5] = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C11)
         pts[k, 6] = f22
-        pts[k, 7] = g_shear * ab ** 1.5 * (zk[ih, COL_C23] * (1.0 - wh) + zk[ih + 1, COL_C23] * wh)
-        pts[k, 8] = g_shear * ab * ab * (zk[ih, COL_C33] * (1.0 - wh) + zk[ih + 1, COL_C33] * wh)
+        pts[k, 7] = g_shear * ab ** 1.5 * _lerp2(zk, j, j1, wy, ih, wh, COL_C23)
+        pts[k, 8] = g_shear * ab * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C33)
         pts[k, 9] = cos_d
+        pts[k, 12] = lead_sign * _lerp2(zk, j, j1, wy, ih, wh, COL_LEAD)
         f22_sum += f22
     g = f22_sum * creep_relax
     fx_sum = 0.0
@@ -865,8 +938,9 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
             continue
         radius, delta, a, lever = pts[k, 1], pts[k, 2], pts[k, 3], pts[k, 4]
         f11, f22, f23, f33, cos_d = pts[k, 5], pts[k, 6], pts[k, 7], pts[k, 8], pts[k, 9]
+        lead = pts[k, 12]
         sin_d = np.sin(delta)
-        v_lat = ws_vy + radius * ws_vroll - speed * ws_yaw - rail_vy
+        v_lat = ws_vy + radius * ws_vroll - speed * ws_yaw - rail_vy + ws_vyaw * lead
         v_ver = ws_vz + side * a * ws_vroll - rail_vz - side * lever * rail_vroll
         xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
         if creep_relax > 0.0 and creep_prev[k] == creep_prev[k]:
@@ -884,7 +958,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         n_sum += normal
         m_roll += side * a * force_z + radius * force_y
         m_spin -= radius * fx
-        m_yaw += -side * a * fx + mz * cos_d
+        m_yaw += -side * a * fx + lead * force_y + mz * cos_d
         m_rail += side * lever * force_z
     out[0] = fx_sum
     out[1] = fy_sum
@@ -897,6 +971,25 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     out[8] = m_spin
     out[9] = m_yaw
     out[10] = m_rail
+
+
+def zone_columns(geom: ContactGeometry, y_rel: float, yaw: float = 0.0) -> np.ndarray:
+    """The left wheel's zone-table columns (n_zones, :data:`N_ZCOLS`) at ``y_rel`` (within the
+    table) and wheelset yaw ``yaw`` as :func:`_wheel_contact_points` interpolates them: linear in
+    y_rel, linear in yaw^2 between the yaw layers, the last layer held beyond; the lead takes
+    the sign of the yaw. For analysis and tests."""
+    layers = geom.zone_array()
+    if layers.shape[0] == 0:
+        raise ValueError("zone_columns: the geometry has no two-point zone tables")
+    y_grid = layers[0, 0, :, COL_Y]
+    per_layer = np.array([[[np.interp(y_rel, y_grid, layers[k, j, :, c]) for c in range(N_ZCOLS)]
+                           for j in range(layers.shape[1])] for k in range(layers.shape[0])])
+    yaw2 = layers[0, :, 0, COL_YAW2]
+    out = np.array([[np.interp(yaw * yaw, yaw2, per_layer[k, :, c]) if yaw2.size > 1
+                     else per_layer[k, 0, c] for c in range(N_ZCOLS)]
+                    for k in range(layers.shape[0])])
+    out[:, COL_LEAD] *= 1.0 if yaw >= 0.0 else -1.0
+    return out
 
 
 def wheel_contact_points(side: float, geom: ContactGeometry, speed: float, ws: dict,

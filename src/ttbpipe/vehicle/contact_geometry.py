@@ -205,6 +205,7 @@ class WheelSide:
     par: np.ndarray
     s: np.ndarray                      # profile lateral (towards the field side)
     zw: np.ndarray                     # profile vertical (= -(r - r0))
+    slope: np.ndarray                  # dzw/ds at the samples (+-inf where the profile is vertical)
 
 
 def _place_wheel(profile: Profile, flange_back_distance: float, step: float,
@@ -214,7 +215,32 @@ def _place_wheel(profile: Profile, flange_back_distance: float, step: float,
     curve = ProfileCurve(profile, smoothing)
     par, s, zw = curve.sample(step)
     base = 0.5 * flange_back_distance - profile.flange_back
-    return WheelSide(curve, base, par, s, zw)
+    slope = curve.local(par)[2]
+    return WheelSide(curve, base, par, s, zw, slope)
+
+
+def trace_line(base_u, radius, slope, yaw_side: float):
+    """Points of a yawed wheel that can touch a straight rail (the trace line; Wang 1984, as in
+    Shabana, Zaazaa & Sugiyama, Railroad Vehicle Dynamics, 2008, section 3.6).
+
+    A wheel of revolution, its profile circle at axle coordinate u (towards its field side) of
+    radius R(u), yawed by ``yaw_side`` (psi, about the vertical, in the wheel's side coordinates:
+    the right wheel's mirrored axes take -psi): the surface normal at angle theta from the
+    circle's lowest point is (sin theta, -R', -cos theta) in the wheelset axes, and its component
+    along the rail, sin(theta) cos(psi) + R' sin(psi), vanishes for sin(theta) = -R' tan(psi).
+    Only those points can carry the contact with a rail that is straight along x. Returns their
+    track-frame (u, z, x) before roll: u = u cos(psi) + R sin(theta) sin(psi),
+    z = -R cos(theta), x = -u sin(psi) + R sin(theta) cos(psi) (x the lead of the point ahead of
+    the axle). ``slope`` = dz/du of the profile (= -R'); where |R' tan psi| > 1 (near-vertical
+    flanks) the trace line has no point and the circle's side point (theta = +-90 deg, far above
+    the rail) stands in. u and z are even in psi, x odd."""
+    t = np.tan(yaw_side)
+    with np.errstate(invalid="ignore"):
+        sin_t = np.clip(np.nan_to_num(slope * t, nan=0.0, posinf=1.0, neginf=-1.0), -1.0, 1.0)
+    cos_t = np.sqrt(1.0 - sin_t * sin_t)
+    sp, cp = np.sin(yaw_side), np.cos(yaw_side)
+    return (base_u * cp + radius * sin_t * sp, -radius * cos_t,
+            -base_u * sp + radius * sin_t * cp)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -261,13 +287,25 @@ class ContactPair:
         return self.nominal_radius
 
     # -- gaps -----------------------------------------------------------------------------------
-    def _gaps(self, side: int, y: np.ndarray, roll: np.ndarray):
-        """Vertical gaps (n_y, n_s) of wheel ``side`` (0 left, 1 right) at zero wheelset height,
-        and the track-frame lateral u of each wheel sample."""
-        sgn = 1.0 if side == 0 else -1.0
-        w, rail = self._wheels[side], self._rails[side]
+    def _trace(self, side: int, yaw: float):
+        """Wheel ``side``'s candidate contact points at wheelset yaw ``yaw`` (rad, track frame):
+        side-coordinate lateral u, vertical z (zero roll, axle at z = 0) and lead x of each
+        profile sample (:func:`trace_line`); at zero yaw the profile in the axle's plane."""
+        w = self._wheels[side]
         big_u = w.base + w.s                                  # wheelset frame, side coordinates
         big_z = w.zw - self._radius(side)
+        if yaw == 0.0:
+            return big_u, big_z, np.zeros_like(big_u)
+        sgn = 1.0 if side == 0 else -1.0
+        return trace_line(big_u, -big_z, w.slope, sgn * yaw)
+
+    def _gaps(self, side: int, y: np.ndarray, roll: np.ndarray, yaw: float = 0.0):
+        """Vertical gaps (n_y, n_s) of wheel ``side`` (0 left, 1 right) at zero wheelset height,
+        and the track-frame lateral u of each wheel sample; ``yaw`` (rad) turns the wheelset
+        about the vertical (its trace line, :meth:`_trace`)."""
+        sgn = 1.0 if side == 0 else -1.0
+        rail = self._rails[side]
+        big_u, big_z, _ = self._trace(side, float(yaw))
         ph = (sgn * roll)[:, None]
         c, s = np.cos(ph), np.sin(ph)
         u = (sgn * y)[:, None] + big_u[None, :] * c - big_z[None, :] * s
@@ -276,14 +314,15 @@ class ContactPair:
         gap = z - zr
         return np.where(np.isfinite(gap), gap, np.inf), u
 
-    def _min_gap(self, side: int, y: np.ndarray, roll: np.ndarray) -> np.ndarray:
-        gap, _ = self._gaps(side, y, roll)
+    def _min_gap(self, side: int, y: np.ndarray, roll: np.ndarray, yaw: float = 0.0) -> np.ndarray:
+        gap, _ = self._gaps(side, y, roll, yaw)
         return gap.min(axis=1)
 
-    def _solve_roll(self, y: np.ndarray, tol: float = 1e-12, maxit: int = 80) -> np.ndarray:
+    def _solve_roll(self, y: np.ndarray, tol: float = 1e-12, maxit: int = 80,
+                    yaw: float = 0.0) -> np.ndarray:
         """Roll angles at which both wheels touch: g_L(phi) - g_R(phi) = 0 (Illinois method)."""
         def f(phi):
-            return self._min_gap(0, y, phi) - self._min_gap(1, y, phi)
+            return self._min_gap(0, y, phi, yaw) - self._min_gap(1, y, phi, yaw)
 
         a = np.full(y.shape, -0.05)
         b = np.full(y.shape, 0.05)
@@ -312,9 +351,10 @@ class ContactPair:
         return c
 
     # -- contact quantities ----------------------------------------------------------------------
-    def _contact(self, side: int, y: np.ndarray, roll: np.ndarray, lift: np.ndarray) -> dict:
+    def _contact(self, side: int, y: np.ndarray, roll: np.ndarray, lift: np.ndarray,
+                 yaw: float = 0.0) -> dict:
         sgn = 1.0 if side == 0 else -1.0
-        gap, u = self._gaps(side, y, roll)
+        gap, u = self._gaps(side, y, roll, yaw)
         gap = gap + lift[:, None]
         w = self._wheels[side]
         rows = np.arange(gap.shape[0])
@@ -324,7 +364,7 @@ class ContactPair:
 
         i1 = np.argmin(gap, axis=1)
         par1, u1, g1 = refine(i1)
-        out = self._quantities(side, sgn, par1, u1)
+        out = self._quantities(side, sgn, par1, u1, yaw)
         # second contact: interior local minima far enough from the first along the wheel
         interior = np.zeros_like(gap, bool)
         interior[:, 1:-1] = (gap[:, 1:-1] < gap[:, :-2]) & (gap[:, 1:-1] <= gap[:, 2:]) \
@@ -334,7 +374,7 @@ class ContactPair:
         i2 = np.argmin(cand, axis=1)
         has2 = np.isfinite(cand[rows, i2])
         par2, u2, g2 = refine(i2)
-        second = self._quantities(side, sgn, par2, u2)
+        second = self._quantities(side, sgn, par2, u2, yaw)
         out["second_gap"] = np.where(has2, g2, np.nan)
         out["two_point"] = has2 & (g2 <= self.two_point_tol)
         for k in ("rolling_radius", "angle", "wheel_position", "rail_position", "track_position",
@@ -377,7 +417,8 @@ class ContactPair:
         return par, u_c, np.where(ok, gmin, g1)
 
     def zone_contacts(self, side: int, y: np.ndarray, roll: np.ndarray,
-                      splits: list[float] | tuple[float, ...], spread: float = 0.0) -> list[dict]:
+                      splits: list[float] | tuple[float, ...], spread: float = 0.0,
+                      yaw: float = 0.0) -> list[dict]:
         """Contact of each zone of wheel ``side``'s profile (0 left, 1 right) on its rail.
 
         The wheel profile is cut at the lateral profile coordinates ``splits`` (m, towards the
@@ -399,12 +440,17 @@ class ContactPair:
         weighted by (spread - excess)^1.5 (the Hertz law of a virtual penetration ``spread``:
         where the contact is conformal, e.g. S1002's tread on 60E1 near the centred position
         with two rigid contact points 10 mm apart and 0.01 mm in gap, the load's position moves
-        continuously with y instead of jumping from one point to the other).
+        continuously with y instead of jumping from one point to the other), and
+        ``longitudinal_centroid`` the same centroid of the points' lead x (:meth:`_trace`).
+
+        ``yaw`` (rad): the wheelset's yaw relative to the track; the contact lies on the
+        wheel's trace line (:func:`trace_line`).
         """
         y = np.atleast_1d(np.asarray(y, float))
         roll = np.broadcast_to(np.asarray(roll, float), y.shape)
         sgn = 1.0 if side == 0 else -1.0
-        gap, u = self._gaps(side, y, roll)
+        gap, u = self._gaps(side, y, roll, yaw)
+        lead = self._trace(side, float(yaw))[2]
         s = self._wheels[side].s
         edges = np.concatenate([[0], np.searchsorted(s, np.sort(np.asarray(splits, float))),
                                 [s.size]])
@@ -428,7 +474,7 @@ class ContactPair:
             at_end = (idx == lo) | (idx == hi - 1)
             use = np.where(at_end & has, i_in, idx)
             par, u_c, _ = self._refine(side, gap, u, use, lo, hi)
-            q = self._quantities(side, sgn, par, u_c)
+            q = self._quantities(side, sgn, par, u_c, yaw)
             q["gap"] = g
             q["interior"] = ~at_end | has
             if spread > 0.0:
@@ -442,17 +488,23 @@ class ContactPair:
                                     / np.where(total > 0.0, total, 1.0), u_c)
                 q["track_position_centroid"] = sgn * centroid
                 q["rail_offset_centroid"] = centroid - self._rails[side].offset
+                q["longitudinal_centroid"] = np.where(
+                    total > 0.0, (weight * lead[None, lo:hi]).sum(axis=1)
+                    / np.where(total > 0.0, total, 1.0), q["longitudinal_position"])
             out.append(q)
         return out
 
-    def _quantities(self, side, sgn, par, u_c):
-        """Contact quantities at wheel spline parameters ``par`` and track lateral ``u_c``."""
+    def _quantities(self, side, sgn, par, u_c, yaw: float = 0.0):
+        """Contact quantities at wheel spline parameters ``par`` and track lateral ``u_c``
+        (``yaw``: the wheelset's, for the lead of the point on the trace line)."""
         w, rail = self._wheels[side], self._rails[side]
         s, zw, wslope, wcurv = w.curve.local(par)
         y_rail, rslope_track, rcurv = rail.at(u_c)
         delta = np.arctan(rslope_track)
         delta_w = np.arctan(wslope)                       # in the wheelset frame
         radius = self._radius(side) - zw
+        lead = (trace_line(w.base + s, radius, wslope, sgn * yaw)[2] if yaw != 0.0
+                else np.zeros_like(radius))
         with np.errstate(divide="ignore"):
             return {
                 "rolling_radius": radius,
@@ -467,15 +519,19 @@ class ContactPair:
                 # lateral distance (track frame, towards the field side) of the contact from
                 # the inclined rail's crown point, the origin of its profile
                 "rail_offset": u_c - rail.offset,
+                # lead of the contact point ahead of the axle (m, track x; zero without yaw)
+                "longitudinal_position": lead,
             }
 
-    def solve(self, y: np.ndarray) -> pd.DataFrame:
-        """Contact table for wheelset lateral displacements ``y`` (m, + left), one row each."""
+    def solve(self, y: np.ndarray, yaw: float = 0.0) -> pd.DataFrame:
+        """Contact table for wheelset lateral displacements ``y`` (m, + left), one row each, at
+        wheelset yaw ``yaw`` (rad, relative to the track; the contact on the trace line)."""
         y = np.atleast_1d(np.asarray(y, float))
         yy = np.concatenate([[0.0], y])
-        roll = self._solve_roll(yy)
-        lift = -self._min_gap(0, yy, roll)               # wheelset height above the reference
-        res = [self._contact(k, yy, roll, lift) for k in (0, 1)]
+        yaw = float(yaw)
+        roll = self._solve_roll(yy, yaw=yaw)
+        lift = -self._min_gap(0, yy, roll, yaw)          # wheelset height above the reference
+        res = [self._contact(k, yy, roll, lift, yaw) for k in (0, 1)]
         z_c = lift - lift[0]
         cols = {"lateral_displacement_mm": yy / MM, "wheelset_roll_rad": roll,
                 "wheelset_vertical_displacement_mm": z_c / MM}
@@ -486,6 +542,7 @@ class ContactPair:
             cols[f"contact_position_wheel_{name}_mm"] = r["wheel_position"] / MM
             cols[f"contact_position_rail_{name}_mm"] = r["rail_position"] / MM
             cols[f"contact_position_track_{name}_mm"] = r["track_position"] / MM
+            cols[f"contact_lead_{name}_mm"] = r["longitudinal_position"] / MM
             cols[f"wheel_transverse_radius_{name}_mm"] = r["wheel_transverse_radius"] / MM
             cols[f"rail_transverse_radius_{name}_mm"] = r["rail_transverse_radius"] / MM
             cols[f"wheel_longitudinal_radius_{name}_mm"] = r["wheel_longitudinal_radius"] / MM

@@ -139,6 +139,10 @@ class ContactParameters:
     flange_back_m: float = 1.360          # flange-back spacing of the wheelset
     contact_points: int = 2               # profiles: 2 = tread and flange with forces of their
     #                                       own; 1 = one point per wheel (the smallest gap)
+    # two-point contact: the contact of a yawed wheelset on its trace line, tabulated over
+    # yaw_layers layers from 0 to yaw_max_rad (held beyond; 1 = the contact at zero yaw only)
+    yaw_max_rad: float = 0.03             # [M] above curving's angles of attack (~10-20 mrad)
+    yaw_layers: int = 7                   # 5 mrad apart (docs/contact_geometry.md)
     # creep law of every contact point (ttbpipe.vehicle.contact): kalker_she = Kalker's linear
     # theory saturated by Shen-Hedrick-Elkins; polach = Polach's method (large spin, and with
     # the parameters below the adhesion fall-off with the slip velocity; Polach 1999, 2005)

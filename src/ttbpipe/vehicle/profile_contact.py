@@ -120,11 +120,13 @@ CONTACT_SPREAD_M = 5.0e-5
 #: Columns of :func:`zone_tables` per zone.
 ZONE_TABLE_COLUMNS = ("y_rel_m", "rolling_radius_m", "gap_change_m", "contact_angle_rad",
                       "wheel_transverse_radius_m", "rail_transverse_radius_m",
-                      "contact_lateral_m", "rail_offset_m", "wheel_longitudinal_radius_m")
+                      "contact_lateral_m", "rail_offset_m", "wheel_longitudinal_radius_m",
+                      "contact_lead_m")
 
 
 def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TABLE_STEP_M,
-                pair: ContactPair | None = None) -> tuple[np.ndarray, float | None, ContactPair]:
+                pair: ContactPair | None = None, yaw: float = 0.0,
+                split: float | None | str = "find") -> tuple[np.ndarray, float | None, ContactPair]:
     """Per zone of the LEFT wheel (tread and flange, :func:`flange_split`; one zone when the
     contact never jumps), on the y_rel grid of :func:`profile_table`, the columns
     :data:`ZONE_TABLE_COLUMNS`: y_rel, rolling radius r (shifted by the same amount as the
@@ -138,8 +140,15 @@ def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TAB
     (:meth:`ContactPair.zone_contacts`), so that the load moves continuously over a conformal
     tread -- and the wheel's
     principal radius in the rolling direction r / cos(delta_w) (delta_w the profile's angle in
-    the wheelset frame: the normal section of a surface of revolution). Returns (array
-    (n_zones, n, 9), the cut or None, the pair); zones ordered flange first."""
+    the wheelset frame: the normal section of a surface of revolution), and the lead of the
+    load ahead of the axle (the same centroid; zero without yaw). Returns (array
+    (n_zones, n, 10), the cut or None, the pair); zones ordered flange first.
+
+    ``yaw`` (rad): the wheelset's yaw relative to the track, the contact on the wheel's trace
+    line (:func:`ttbpipe.vehicle.contact_geometry.trace_line`); the reference gap g(0) stays the
+    centred, unyawed wheel's, so that dz carries the drop or rise that yaw brings. ``split``:
+    the tread/flange cut to use (a float or None), by default found at zero yaw
+    (:func:`flange_split`; the zones are parts of the wheel and do not move with yaw)."""
     pair = profile_pair(p) if pair is None else pair
     n = int(round(half_range_m / step_m))
     y = np.arange(-n, n + 1) * step_m
@@ -147,19 +156,21 @@ def zone_tables(p, half_range_m: float = TABLE_HALF_RANGE_M, step_m: float = TAB
     centre = pair._min_gap(0, np.zeros(1), np.zeros(1))[0]
     one = pair._contact(0, np.zeros(1), np.zeros(1), np.zeros(1))
     shift = float(p.wheel_radius) - float(one["rolling_radius"][0])
-    split = flange_split(pair, y)
+    if isinstance(split, str):
+        split = flange_split(pair, y)
     zones = pair.zone_contacts(0, y, zero, [] if split is None else [split],
-                               spread=CONTACT_SPREAD_M)
+                               spread=CONTACT_SPREAD_M, yaw=float(yaw))
     out = np.empty((len(zones), y.size, len(ZONE_TABLE_COLUMNS)))
     for k, z in enumerate(zones):
         out[k] = np.column_stack([y, z["rolling_radius"] + shift, centre - z["gap"], z["angle"],
                                   z["wheel_transverse_radius"], z["rail_transverse_radius"],
                                   z["track_position_centroid"] - y, z["rail_offset_centroid"],
-                                  (z["rolling_radius"] + shift) / np.cos(z["wheel_angle_in_wheelset"])])
+                                  (z["rolling_radius"] + shift) / np.cos(z["wheel_angle_in_wheelset"]),
+                                  z["longitudinal_centroid"]])
         # rows where no point of the zone lies above the rail head (the flange inside the
         # rail when the wheel moves far towards the track centre): the zone is open there;
         # hold the nearest row that has a point, which must then be far from contact
-        bad = ~np.all(np.isfinite(out[k][:, [1, 2, 3, 6, 7, 8]]), axis=1)
+        bad = ~np.all(np.isfinite(out[k][:, [1, 2, 3, 6, 7, 8, 9]]), axis=1)
         if bad.all():
             raise ValueError(f"train.contact: profiles {p.wheel_profile!r} on {p.rail_profile!r}: "
                              f"zone {k} of the wheel never lies above the rail")
