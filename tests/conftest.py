@@ -14,3 +14,10 @@ from ttbpipe.threads import WORKER_ENV
 
 for _name, _value in WORKER_ENV.items():
     os.environ.setdefault(_name, _value)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``slow`` first, each group in collection order (a stable sort, the same in
+    every pytest-xdist worker): the scheduler hands out tests in this order, and a long test
+    collected near the end would otherwise run alone on one core after the other has finished."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)

@@ -18,11 +18,11 @@ have tens of samples, not thousands; what must hold is the paper's conclusion, n
 * case 4 (Fig. 17): at every horizon the upper limit (p = 0.95) is above the general state
   (p = 0.5), which is above the lower limit (p = 0.05), for the wheel force and deck acceleration.
 
-Cases 2 and 3 cost about 800 and 600 CPU-seconds (112 and 49 coupled runs): they are marked
-``validation`` and left out of the default run, which keeps the test suite within its time
-budget; ``python -m pytest -m validation -n 2`` runs them (docs/validation.md). The default run
-still drives both cases' whole pipelines, configuration to comparison tables and figures, at a
-few samples per scenario (tests/test_cases_tiny.py).
+Cases 2, 3 and 4 cost about 800, 600 and 430 CPU-seconds (112, 49 and 30 coupled runs): they
+are marked ``validation`` and left out of the default run, which keeps the test suite within its
+time budget; ``python -m pytest -m validation -n 2`` runs them (docs/validation.md). The default
+run still drives the three cases' whole pipelines, configuration to comparison tables and
+figures, at a few samples per scenario (tests/test_cases_tiny.py).
 """
 
 from __future__ import annotations
@@ -115,6 +115,7 @@ def test_case3_small_tipm_matches_mc_and_single_excitation_is_exceeded(tmp_path)
     assert (single["mean"] > single["single"]).all()
 
 
+@pytest.mark.validation
 def test_case4_small_forecast_limits_are_ordered(tmp_path):
     out = run_case(tmp_path, 4)
     comparison = pd.read_parquet(out / "comparison.parquet")

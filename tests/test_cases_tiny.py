@@ -1,11 +1,11 @@
-"""Paper cases 2 and 3 end to end at a few samples per scenario, in the default test run.
+"""Paper cases 2, 3 and 4 end to end at a few samples per scenario, in the default test run.
 
 Their small variants (tests/test_cases_small.py, marker ``validation``) check the paper's
-conclusions and take 10-15 min each; these runs check that each case's whole pipeline still goes
-from its configuration file (config/case2.yaml, config/case3.yaml) through the study, the
-aggregation and the comparison rule to the tables, the summary and the paper's figures, with the
-counts the configuration asks for and finite numbers. With 2-5 samples a scenario the spreads
-themselves are noise, so no statistical conclusion is asserted here.
+conclusions and take 4-15 min each; these runs check that each case's whole pipeline still goes
+from its configuration file (config/case2.yaml, config/case3.yaml, config/case4.yaml) through
+the study, the aggregation and the comparison rule to the tables, the summary and the paper's
+figures, with the counts the configuration asks for and finite numbers. With 2-5 samples a
+scenario the spreads themselves are noise, so no statistical conclusion is asserted here.
 """
 
 from __future__ import annotations
@@ -38,6 +38,22 @@ inspections:
 study:
   scenarios:
     irregularity_mc: {samples: 3}
+"""
+
+
+CASE4_TINY = """\
+results_dir: results/case4_tiny
+logs_dir: logs/case4_tiny
+inspections:
+  synthetic:
+    directory: resources/inspections/synthetic_case4_tiny
+    campaigns: 6
+    length_km: 3.0
+tipm:
+  selection: {min_samples: 2, max_samples: 2}
+study:
+  scenarios:
+    forecast: {horizons_months: [6]}
 """
 
 
@@ -85,3 +101,14 @@ def test_case3_pipeline_writes_tipm_mc_single_comparison_and_figures(tmp_path):
                  "fig15b_pdf_wheel_lateral_force.png", "fig16a_pdf_rail_vertical_acc.png",
                  "fig16b_pdf_rail_lateral_acc.png"):
         assert (out / "figures" / name).stat().st_size > 1000
+
+
+def test_case4_pipeline_writes_forecast_levels_and_figure(tmp_path):
+    out = run_case(tmp_path, 4, overlay=CASE4_TINY, name="case4_tiny")
+    comparison = pd.read_parquet(out / "comparison.parquet")
+    for quantity in ("max_wheel_vertical_force_N", "max_deck_vertical_acc_m_s2"):
+        rows = comparison[comparison["quantity"] == quantity]
+        assert sorted(rows["level"]) == [0.05, 0.5, 0.95]
+        assert set(rows["months"]) == {6}
+        assert _finite(rows, ["mean"]) and (rows["mean"] > 0).all()
+    assert (out / "figures" / "fig17_forecast_limits.png").stat().st_size > 1000
