@@ -191,3 +191,31 @@ def test_contact_geometry_command_takes_the_yaw(tmp_path, pair):
     np.testing.assert_allclose(table["contact_lead_right_mm"].to_numpy()[::-1],
                                -table["contact_lead_left_mm"].to_numpy(), atol=1e-9)
     assert read_provenance(out)["config"]["yaw_mrad"] == 10.0
+
+
+def test_wheelset_yaw_beyond_the_tables_is_reported(caplog):
+    """A car curving on R = 600 m yaws its wheelsets by up to 1.6 mrad: with tables that cover
+    0.1 mrad the run warns with the remedy (the kernel held the last layer); with the default
+    30 mrad it does not, and the largest yaw is returned."""
+    import logging
+
+    from test_curving import _one_car_on_a_curve
+
+    from ttbpipe.simulation.coupled import check_yaw_range, integrate, prepare
+
+    contact = {"profile": "profiles", "yaw_max_rad": 1e-4, "yaw_layers": 2}
+    case = _one_car_on_a_curve(120.0, 600.0, 100.0, length_m=15.0, contact=contact)
+    setup = prepare(case)
+    raw = integrate(setup)
+    with caplog.at_level(logging.WARNING, logger="ttbpipe.simulation.coupled"):
+        yaw = check_yaw_range(setup, raw.train)
+    assert yaw > 1e-3
+    assert "beyond the 0.1 mrad that the contact tables cover" in caplog.text
+    assert "raise yaw_max_rad" in caplog.text
+    caplog.clear()
+    setup = prepare(_one_car_on_a_curve(120.0, 600.0, 100.0, length_m=15.0,
+                                        contact={"profile": "profiles"}))
+    with caplog.at_level(logging.WARNING, logger="ttbpipe.simulation.coupled"):
+        yaw_default = check_yaw_range(setup, integrate(setup).train)
+    assert 1e-3 < yaw_default < 0.03
+    assert "contact tables cover" not in caplog.text

@@ -69,6 +69,9 @@ def run_coupled(case_config: Mapping[str, Any], *, track: Irregularity | pd.Data
     elif setup.direction != 1 or (setup.structure is not None and setup.structure.n_tracks > 1):
         summary["trains"] = [placement(setup)]
     check_finite(setup, table, summary)
+    check_yaw_range(setup, raw.train)
+    if setup.second is not None:
+        check_yaw_range(setup.second, raw.second, "the second train")
     if summary["contact_loss_count"] > 0:
         from .diagnosis import explain
         _, text = explain(setup.dt, diagnosis_limits(setup), setup.irregularity_info,
@@ -80,3 +83,22 @@ def run_coupled(case_config: Mapping[str, Any], *, track: Irregularity | pd.Data
     log.info("coupled run done: %.1f s wall, %.2f s per simulated s", raw.wall_s,
              summary["wall_s_per_simulated_s"])
     return table, summary
+
+
+def check_yaw_range(setup, recorder, train: str = "the train") -> float | None:
+    """Largest wheelset yaw of a run (rad, at the output steps) against the yaw the two-point
+    contact tables cover (:func:`ttbpipe.vehicle.contact.yaw_table_limit`; beyond it the kernel
+    holds the last layer): a warning naming the remedy when it was exceeded. None when the
+    geometry has no yaw layers."""
+    from ..vehicle.contact import yaw_table_limit
+
+    limit = yaw_table_limit(setup.geom)
+    if limit is None or recorder.q_hist.size == 0:
+        return None
+    yaw = float(np.max(np.abs(recorder.q_hist[:, setup.model.wheelset_dofs[:, 4]])))
+    if yaw > limit:
+        log.warning("%s: a wheelset yawed %.1f mrad, beyond the %.1f mrad that the contact "
+                    "tables cover (train.contact.yaw_max_rad; the last yaw layer was used "
+                    "beyond it): raise yaw_max_rad, with yaw_layers keeping the layers about "
+                    "5 mrad apart", train, 1e3 * yaw, 1e3 * limit)
+    return yaw

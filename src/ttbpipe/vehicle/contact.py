@@ -973,6 +973,15 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     out[10] = m_rail
 
 
+def yaw_table_limit(geom: ContactGeometry) -> float | None:
+    """The largest wheelset yaw (rad) the two-point tables cover (the last layer is held
+    beyond it), or None when the geometry has no yaw layers."""
+    layers = geom.zone_array()
+    if layers.shape[0] == 0 or layers.shape[1] < 2:
+        return None
+    return float(np.sqrt(layers[0, -1, 0, COL_YAW2]))
+
+
 def zone_columns(geom: ContactGeometry, y_rel: float, yaw: float = 0.0) -> np.ndarray:
     """The left wheel's zone-table columns (n_zones, :data:`N_ZCOLS`) at ``y_rel`` (within the
     table) and wheelset yaw ``yaw`` as :func:`_wheel_contact_points` interpolates them: linear in
