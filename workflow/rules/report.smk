@@ -87,6 +87,8 @@ rule aggregate_study:
             caption="../report/stats_forecast_envelope.rst",
             category="8. Forecast",
         ),
+    # tail fits and figures in two processes (ttbpipe.parallel); the job runs alone at the end
+    threads: 2
     params:
         limits=config.get("limits"),
         settings=STUDY_SETTINGS,

@@ -10,6 +10,9 @@ from ttbpipe.tipm.stages import population_dates as _tipm_population_dates
 
 TIPM = config.get("tipm", {})
 TIPM_LAST = list(CAMPAIGNS)[-1]
+# What the TIPM jobs compute from (params): not which campaigns are targets, so that asking for
+# every campaign's selection does not rerun the latest one's.
+TIPM_MODEL = {key: value for key, value in TIPM.items() if key != "campaign_selections"}
 
 
 def tipm_population_psds(wildcards) -> list[str]:
@@ -30,7 +33,7 @@ rule tipm_select:
         metrics=results_path("tipm/selection/{date}.metrics.parquet"),
         profiles=results_path("tipm/profiles/{date}.parquet"),
     params:
-        tipm=TIPM,
+        tipm=TIPM_MODEL,
         psd=config["psd"],
         seed=config["study"]["seed"],
         version=MODEL_VERSION,
@@ -63,7 +66,7 @@ rule tipm_evolution:
     output:
         results_path("tipm/evolution.parquet"),
     params:
-        tipm=TIPM,
+        tipm=TIPM_MODEL,
         psd=config["psd"],
         version=MODEL_VERSION,
     log:
@@ -89,7 +92,7 @@ rule tipm_forecast:
             category="3. TIPM and spectral evolution",
         ),
     params:
-        tipm=TIPM,
+        tipm=TIPM_MODEL,
         psd=config["psd"],
         seed=config["study"]["seed"],
         base_date=TIPM_LAST,
@@ -114,7 +117,7 @@ rule tipm_validate:
             category="3. TIPM and spectral evolution",
         ),
     params:
-        tipm=TIPM,
+        tipm=TIPM_MODEL,
         psd=config["psd"],
         seed=config["study"]["seed"],
         version=MODEL_VERSION,
@@ -152,9 +155,11 @@ rule tipm_figures:
 
 
 def tipm_targets() -> list[str]:
-    """Final TIPM outputs: every campaign's selection and profiles, the latest campaign's
-    distribution fit and figures, the forecast and the hold-out validation."""
-    targets = expand(results_path("tipm/profiles/{date}.parquet"), date=CAMPAIGNS)
+    """Final TIPM outputs: the latest campaign's selection, profiles, distribution fit and
+    figures (every campaign's selection and profiles with tipm.campaign_selections: all), the
+    forecast and the hold-out validation."""
+    selected = CAMPAIGNS if TIPM.get("campaign_selections", "latest") == "all" else [TIPM_LAST]
+    targets = expand(results_path("tipm/profiles/{date}.parquet"), date=selected)
     targets += [
         f"{RESULTS}/tipm/distribution/{TIPM_LAST}.parquet",
         f"{RESULTS}/figures/tipm_psd_bands_{TIPM_LAST}.png",

@@ -14,4 +14,4 @@ setup_logging(snakemake.log[0])
 aggregate_study(list(snakemake.input.extremes), list(snakemake.input.histories),
                 read_design(snakemake.input.designs), snakemake.config,
                 out=output_folder(dict(snakemake.output.items())),
-                settings=snakemake.params.settings)
+                settings=snakemake.params.settings, workers=snakemake.threads)

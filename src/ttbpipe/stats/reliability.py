@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 from scipy import special, stats
 
+from ..parallel import process_map
 from ..reliability.tail import TailNotEstimable, TailSettings, estimate_tail, reliability_index
 from .limits import (Limit, LimitContext, LimitNotEvaluable, applied_threshold_text,
                      limits_from_config)
@@ -433,18 +434,33 @@ def _ordered(df: pd.DataFrame) -> pd.DataFrame:
     return df.sort_values("sample_index", kind="stable").reset_index(drop=True)
 
 
+def _tail_task(args: tuple) -> dict[str, Any]:
+    return tail_columns(*args)
+
+
+def _tail_rows(tasks: list[tuple], workers: int) -> list[dict[str, Any]]:
+    """:func:`tail_columns` of every task ``(values, thresholds, weights, settings, category)``,
+    in ``workers`` processes when > 1 (each fit is seeded by its settings alone, so the result
+    does not depend on the number of workers or the order of the fits)."""
+    return process_map(_tail_task, tasks, workers)
+
+
 def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
                   context: LimitContext = LimitContext(),
-                  settings: ReliabilitySettings = ReliabilitySettings()) -> pd.DataFrame:
+                  settings: ReliabilitySettings = ReliabilitySettings(),
+                  workers: int = 1) -> pd.DataFrame:
     """Exceedance probability, interval and verdict for every (scenario, limit).
 
     Limits whose column is absent, or that need an input nobody gives, appear with
     ``status`` 'not evaluated: ...' (and a logged warning) instead of being dropped. Every
     evaluated row also carries the tail estimate (:data:`TAIL_COLUMNS`, :func:`tail_columns`;
     skipped for grades), the reliability index of the counting estimate and the target verdict
-    (:data:`VERDICT_COLUMNS`, :func:`target_verdict`).
+    (:data:`VERDICT_COLUMNS`, :func:`target_verdict`). ``workers``: processes for the tail
+    fits (the results do not depend on it).
     """
     rows = []
+    tail_tasks: list[tuple] = []
+    tail_of: list[int] = []
     for scenario, block in extremes.groupby("scenario", sort=True):
         block = _ordered(block)
         weights = block["weight"].to_numpy(dtype=float)
@@ -471,11 +487,14 @@ def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
             exceeded = values > thresholds
             est = _estimate(estimator, exceeded, weights)
             ok, reason = settings.criterion.judge(est)
-            row = {**base, **asdict(est), "half_width": est.half_width,
-                   "weighted": isinstance(estimator, WeightedExceedance),
-                   "sufficient": ok, "status": reason,
-                   **tail_columns(values, thresholds, weights, settings.tail, limit.category)}
-            rows.append({**row, **target_verdict(row, settings.target_probability)})
+            tail_of.append(len(rows))
+            tail_tasks.append((values, thresholds, weights, settings.tail, limit.category))
+            rows.append({**base, **asdict(est), "half_width": est.half_width,
+                         "weighted": isinstance(estimator, WeightedExceedance),
+                         "sufficient": ok, "status": reason})
+    for i, tail in zip(tail_of, _tail_rows(tail_tasks, workers)):
+        row = {**rows[i], **tail}
+        rows[i] = {**row, **target_verdict(row, settings.target_probability)}
     return pd.DataFrame(rows)
 
 

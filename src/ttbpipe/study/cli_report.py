@@ -34,6 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="study configuration (YAML); its limits: section is used")
     parser.add_argument("--out", type=Path, required=True, help="output folder")
     parser.add_argument("--bins", type=int, default=256, help="histogram bins per grid point")
+    parser.add_argument("--workers", type=int, default=1,
+                        help="processes for the tail fits and the figures (results do not "
+                             "depend on it)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         design = read_design(args.design) if args.design else None
         written = aggregate_study(args.extremes, args.histories, design, config, args.out,
-                                  n_bins=args.bins)
+                                  n_bins=args.bins, workers=args.workers)
     except ValueError as exc:  # ResultsSchemaError included: bad or missing result files
         log.error("%s", exc)
         return 1

@@ -37,6 +37,7 @@ Columns of every table: docs/studies.md.
 
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import re
@@ -48,6 +49,7 @@ import numpy as np
 import pandas as pd
 
 from .. import io
+from ..parallel import process_map
 from ..dates import DATE_PATTERN
 from ..stats import plots, streaming, tables
 from ..assessment.columns import assessed_indices
@@ -171,7 +173,7 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
                     design: pd.DataFrame | None, config: Mapping[str, Any],
                     out: str | os.PathLike[str] = "results/study", *,
                     settings: Mapping[str, Mapping[str, Any]] | None = None,
-                    n_bins: int = 256) -> dict[str, Path]:
+                    n_bins: int = 256, workers: int = 1) -> dict[str, Path]:
     """Write every study table, figure and report page (see the module docstring).
 
     ``settings`` (the workflow's per-scenario batch settings, ttbpipe.study.plan.batch_settings):
@@ -179,6 +181,8 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
     (:func:`ttbpipe.study.batch.verify_batches`: a stale or unreadable batch stops here, named).
     ``design=None``: the minimal design of the extremes (:func:`design_from_extremes`).
     Returns the path of every file written, keyed as :data:`STUDY_FILES` (figures one by one).
+    ``workers``: processes for the tail fits and the figures (:mod:`ttbpipe.parallel`; the
+    results do not depend on it).
     """
     out = Path(out)
     paths = {name: out / relative for name, relative in STUDY_FILES.items()}
@@ -213,7 +217,7 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
         raw_limits = [replace(lim, category="raw") for lim in raw_limits]
     limits = limits + raw_limits
     reliability = ReliabilitySettings.from_config(section)
-    table = assess_limits(extremes, limits, context, reliability)
+    table = assess_limits(extremes, limits, context, reliability, workers=workers)
     written["reliability"] = io.write_table(table, paths["reliability"], config=config,
                                             kind="study_reliability")
     util = utilisation.utilisation_table(extremes, indices, table)
@@ -262,8 +266,9 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
     for name, text in report_pages.study_pages(summary, config, table1, t1h).items():
         written[name] = io.write_text(text, paths[name])
 
-    written.update(_figures(extremes, stats, curves, groups, raw_limits, context, out / "figures"))
-    written.update(_utilisation_figures(extremes, indices, out / "figures" / "utilisation"))
+    tasks = _figure_tasks(extremes, stats, curves, groups, raw_limits, context, out / "figures")
+    tasks += _utilisation_figure_tasks(extremes, indices, out / "figures" / "utilisation")
+    written.update(_draw_figures(tasks, workers))
     log.info("study aggregated: %d samples, %d scenarios, %d limit rows -> %s", len(extremes),
              extremes["scenario"].nunique(), len(table), out)
     return written
@@ -279,16 +284,36 @@ def _assessment_metadata(paths: Sequence[str | os.PathLike[str]]) -> list[dict]:
     return []
 
 
-def _utilisation_figures(extremes, indices, folder: Path) -> dict[str, Path]:
+def _utilisation_figure_tasks(extremes, indices, folder: Path) -> list[tuple]:
+    return [(f"utilisation_{utilisation.figure_name(section)}",
+             folder / f"{utilisation.figure_name(section)}.png",
+             functools.partial(utilisation.plot_section, extremes, indices, section))
+            for section in utilisation.sections_present(indices)]
+
+
+#: The figure tasks ``(name, path, build)`` of the running aggregation: module level, so that
+#: the forked workers of :func:`ttbpipe.parallel.process_map` see them.
+_FIGURE_TASKS: list[tuple] = []
+
+
+def _draw_figure(i: int) -> tuple[str, Path]:
     import matplotlib.pyplot as plt
 
-    written: dict[str, Path] = {}
-    for section in utilisation.sections_present(indices):
-        fig = utilisation.plot_section(extremes, indices, section)
-        name = utilisation.figure_name(section)
-        written[f"utilisation_{name}"] = io.save_figure(fig, folder / f"{name}.png")
+    name, path, build = _FIGURE_TASKS[i]
+    fig = build()
+    try:
+        return name, io.save_figure(fig, path)
+    finally:
         plt.close(fig)
-    return written
+
+
+def _draw_figures(tasks: list[tuple], workers: int) -> dict[str, Path]:
+    """Draw and save every figure task (in ``workers`` processes): {name: path}."""
+    _FIGURE_TASKS[:] = tasks
+    try:
+        return dict(process_map(_draw_figure, range(len(tasks)), workers))
+    finally:
+        _FIGURE_TASKS.clear()
 
 
 def _distinct_curves(curves: list[pd.DataFrame]) -> list[pd.DataFrame]:
@@ -336,10 +361,22 @@ def _off_scale_note(ax, column: str, threshold: float | None, shown: float | Non
                      fontsize=9)
 
 
-def _figures(extremes, stats, curves, groups, limits, context, root: Path) -> dict[str, Path]:
-    import matplotlib.pyplot as plt
+def _pdf_figure(extremes, column, scenarios, group, threshold, shown):
+    fig = plots.plot_extreme_pdfs(extremes, column, scenarios=scenarios, threshold=shown)
+    fig.axes[0].set_title(f"{group} scenarios", fontsize=9)
+    _off_scale_note(fig.axes[0], column, threshold, shown)
+    return fig
 
-    written: dict[str, Path] = {}
+
+def _envelope_figure(env, column, threshold, shown):
+    fig = plots.plot_forecast_envelope(env, threshold=shown)
+    _off_scale_note(fig.axes[0], column, threshold, shown)
+    return fig
+
+
+def _figure_tasks(extremes, stats, curves, groups, limits, context, root: Path) -> list[tuple]:
+    """The study's figures as tasks ``(name, path, build)``; their folders emptied first."""
+    tasks: list[tuple] = []
     for kind in FIGURE_KINDS:
         _clear(root / kind)
     thresholds = {lim.column: lim.threshold for lim in limits
@@ -348,33 +385,29 @@ def _figures(extremes, stats, curves, groups, limits, context, root: Path) -> di
         cs = _distinct_curves(cs)
         if not cs:
             continue
-        fig = plots.plot_exceedance_convergence(cs, ncols=min(3, len(cs)))
-        written[f"convergence_{scenario}"] = io.save_figure(fig, root / "convergence" / f"{scenario}.png")
-        plt.close(fig)
+        tasks.append((f"convergence_{scenario}", root / "convergence" / f"{scenario}.png",
+                      functools.partial(plots.plot_exceedance_convergence, cs,
+                                        ncols=min(3, len(cs)))))
     for group, scenarios in groups.items():
         for column in _indices_present(extremes):
             largest = float(extremes.loc[extremes["scenario"].isin(scenarios), column].max())
             shown = _near(thresholds.get(column), largest)
-            fig = plots.plot_extreme_pdfs(extremes, column, scenarios=scenarios, threshold=shown)
-            fig.axes[0].set_title(f"{group} scenarios", fontsize=9)
-            _off_scale_note(fig.axes[0], column, thresholds.get(column), shown)
-            written[f"pdf_{group}_{column}"] = io.save_figure(fig, root / "pdf" / f"{group}_{column}.png")
-            plt.close(fig)
+            tasks.append((f"pdf_{group}_{column}", root / "pdf" / f"{group}_{column}.png",
+                          functools.partial(_pdf_figure, extremes, column, scenarios, group,
+                                            thresholds.get(column), shown)))
         for quantity in sorted({q for s, q in stats if s in scenarios}):
-            fig = plots.plot_history_statistics(stats, quantity, scenarios=scenarios,
-                                                band=(0.05, 0.95) if len(scenarios) == 1 else None)
-            written[f"history_{group}_{quantity}"] = io.save_figure(
-                fig, root / "history" / f"{group}_{quantity}.png")
-            plt.close(fig)
+            tasks.append((f"history_{group}_{quantity}", root / "history" / f"{group}_{quantity}.png",
+                          functools.partial(plots.plot_history_statistics, stats, quantity,
+                                            scenarios=scenarios,
+                                            band=(0.05, 0.95) if len(scenarios) == 1 else None)))
     dated = sorted(s for s in extremes["scenario"].unique() if _DATE.match(str(s)))
     if len(dated) >= 2:
         for column in ENVELOPE_COLUMNS:
             if column in extremes.columns:
                 env = tables.forecast_envelope(extremes[extremes["scenario"].isin(dated)],
-                                                        column, scenarios=dated)
+                                               column, scenarios=dated)
                 shown = _near(thresholds.get(column), float(env["upper"].max()))
-                fig = plots.plot_forecast_envelope(env, threshold=shown)
-                _off_scale_note(fig.axes[0], column, thresholds.get(column), shown)
-                written[f"envelope_{column}"] = io.save_figure(fig, root / "envelope" / f"{column}.png")
-                plt.close(fig)
-    return written
+                tasks.append((f"envelope_{column}", root / "envelope" / f"{column}.png",
+                              functools.partial(_envelope_figure, env, column,
+                                                thresholds.get(column), shown)))
+    return tasks
