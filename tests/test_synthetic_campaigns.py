@@ -166,16 +166,22 @@ def test_workflow_scripts(tmp_path):
     assert all(Path(p).is_file() for p in outputs)
     assert read_provenance(outputs[1])["config"] == config
     clean_path, repairs_path = tmp_path / "clean.parquet", tmp_path / "clean.repairs.json"
+    short_sections = {"section_length_m": 250.0, "segment_length_m": 250.0}   # 0.5 km campaigns
     fake = types.SimpleNamespace(
-        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping={}, version="t"),
+        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping={}, psd=short_sections,
+                                                    version="t"),
         input=Files([outputs[1]]),
-        output=Files([], clean=str(clean_path), repairs=str(repairs_path)),
+        output=Files([], clean=str(clean_path), repairs=str(repairs_path),
+                     psd=str(tmp_path / "psd.parquet")),
         log=[str(tmp_path / "check.log")])
-    runpy.run_path(str(scripts / "check_inspection.py"), init_globals={"snakemake": fake})
+    runpy.run_path(str(scripts / "prepare_campaign.py"), init_globals={"snakemake": fake})
     provenance = read_provenance(clean_path)
     assert provenance["kind"] == "inspection_clean" and provenance["config"] == config
     assert json.loads(repairs_path.read_text())["source"] == outputs[1]
     assert "repaired samples" in (tmp_path / "check.log").read_text()
+    psd = read_provenance(tmp_path / "psd.parquet")   # the same job's PSD of the cleaned table
+    assert psd["kind"] == "psd" and psd["source"] == str(clean_path)
+    assert psd["psd"] == short_sections
 
     # A file of the user's own car: read through the mapping the rule passes in params.
     own = read_table(outputs[1]).rename(columns={"chainage_m": "KM", "gauge_mm": "GAUGE"})
@@ -185,12 +191,13 @@ def test_workflow_scripts(tmp_path):
     mapping = {"columns": {"KM": "chainage_m", "GAUGE": "gauge_mm"}, "units": {"chainage": "km"}}
     mapped_path = tmp_path / "mapped.parquet"
     fake = types.SimpleNamespace(
-        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping=mapping,
+        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping=mapping, psd=short_sections,
                                                     version="t"),
         input=Files([str(user_file)]),
-        output=Files([], clean=str(mapped_path), repairs=str(tmp_path / "mapped.json")),
+        output=Files([], clean=str(mapped_path), repairs=str(tmp_path / "mapped.json"),
+                     psd=str(tmp_path / "mapped_psd.parquet")),
         log=[str(tmp_path / "mapped.log")])
-    runpy.run_path(str(scripts / "check_inspection.py"), init_globals={"snakemake": fake})
+    runpy.run_path(str(scripts / "prepare_campaign.py"), init_globals={"snakemake": fake})
     doc = json.loads((tmp_path / "mapped.json").read_text())
     assert doc["renamed_columns"] == {"KM": "chainage_m", "GAUGE": "gauge_mm"}
     assert doc["unit_conversions"] == {"chainage_m": {"unit": "km", "factor": 1000.0}}

@@ -1,4 +1,5 @@
-# Stage 1: inspection campaigns -> validated, cleaned tables -> per-section PSDs.
+# Stage 1: inspection campaigns -> validated, cleaned tables -> per-section PSDs (one job per
+# campaign: rule prepare_campaign).
 
 
 rule synth_inspections:
@@ -28,36 +29,25 @@ def inspection_mapping(wildcards) -> dict:
     return {key: dict(section[key]) for key in ("columns", "units") if section.get(key)}
 
 
-rule check_inspection:
-    """Validate one campaign file and apply the documented repairs."""
+rule prepare_campaign:
+    """One campaign file: validated, cleaned (the documented repairs), and its Welch PSD per
+    track section and channel. One job per campaign: a job's interpreter and imports cost more
+    than the work (docs/performance.md), and a new campaign still runs only its own job."""
     input:
         campaign_file,
     output:
         clean=results_path("inspections/clean/{date}.parquet"),
         repairs=results_path("inspections/clean/{date}.repairs.json"),
+        psd=results_path("psd/{date}.parquet"),
     params:
         cleaning=config["inspections"].get("cleaning", {}),
         mapping=inspection_mapping,
-        version=MODEL_VERSION,
-    log:
-        log_path("inspections/check/{date}.log"),
-    script:
-        "../scripts/check_inspection.py"
-
-
-rule estimate_psd:
-    """Welch PSD per track section and channel of one cleaned campaign."""
-    input:
-        results_path("inspections/clean/{date}.parquet"),
-    output:
-        results_path("psd/{date}.parquet"),
-    params:
         psd=config["psd"],
         version=MODEL_VERSION,
     log:
-        log_path("psd/{date}.log"),
+        log_path("inspections/prepare/{date}.log"),
     script:
-        "../scripts/estimate_psd.py"
+        "../scripts/prepare_campaign.py"
 
 
 rule plot_psd_vs_standard:
