@@ -1,6 +1,6 @@
 """Wall time of a study's aggregation (tables, tail fits, figures, pages) with 1 and 2 workers.
 
-    python benchmarks/bench_study_aggregate.py [--results results] [--rounds 2]
+    python benchmarks/study_aggregate_workers.py [--results results] [--rounds 2]
 
 Reads the batch files of a finished study under ``--results`` (``study/batches``, the designs in
 ``study/design``; run ``snakemake --cores 2`` first) and runs
