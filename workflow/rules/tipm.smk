@@ -158,7 +158,7 @@ def tipm_targets() -> list[str]:
     """Final TIPM outputs: the latest campaign's selection, profiles, distribution fit and
     figures (every campaign's selection and profiles with tipm.campaign_selections: all), the
     forecast and the hold-out validation."""
-    selected = CAMPAIGNS if TIPM.get("campaign_selections", "latest") == "all" else [TIPM_LAST]
+    selected = CAMPAIGNS if TIPM["campaign_selections"] == "all" else [TIPM_LAST]
     targets = expand(results_path("tipm/profiles/{date}.parquet"), date=selected)
     targets += [
         f"{RESULTS}/tipm/distribution/{TIPM_LAST}.parquet",

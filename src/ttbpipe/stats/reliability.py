@@ -435,14 +435,10 @@ def _ordered(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def _tail_task(args: tuple) -> dict[str, Any]:
+    """:func:`tail_columns` of ``(values, thresholds, weights, settings, category)``: a worker's
+    task (each fit is seeded by its settings alone, so the result does not depend on the number
+    of workers or the order of the fits)."""
     return tail_columns(*args)
-
-
-def _tail_rows(tasks: list[tuple], workers: int) -> list[dict[str, Any]]:
-    """:func:`tail_columns` of every task ``(values, thresholds, weights, settings, category)``,
-    in ``workers`` processes when > 1 (each fit is seeded by its settings alone, so the result
-    does not depend on the number of workers or the order of the fits)."""
-    return process_map(_tail_task, tasks, workers)
 
 
 def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
@@ -492,7 +488,7 @@ def assess_limits(extremes: pd.DataFrame, limits: Iterable[Limit],
             rows.append({**base, **asdict(est), "half_width": est.half_width,
                          "weighted": isinstance(estimator, WeightedExceedance),
                          "sufficient": ok, "status": reason})
-    for i, tail in zip(tail_of, _tail_rows(tail_tasks, workers)):
+    for i, tail in zip(tail_of, process_map(_tail_task, tail_tasks, workers)):
         row = {**rows[i], **tail}
         rows[i] = {**row, **target_verdict(row, settings.target_probability)}
     return pd.DataFrame(rows)
