@@ -41,6 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..filters import butterworth_sos
+
 log = logging.getLogger(__name__)
 
 #: A cut-off at or above this fraction of the Nyquist frequency cannot be designed; the signal
@@ -104,7 +106,9 @@ class Butterworth:
         if kind == "highpass" and self.low_hz >= top:
             raise ValueError(f"{self.describe()}: the high-pass edge {self.low_hz:g} Hz is above "
                              f"0.95 x the Nyquist frequency {nyq:g} Hz of the history")
-        return signal.butter(int(self.order), cut, btype=kind, fs=fs_hz, output="sos")
+        cut = tuple(float(c) for c in np.atleast_1d(cut)) if np.size(cut) > 1 else float(
+            np.atleast_1d(cut)[0])
+        return butterworth_sos(int(self.order), cut, kind, float(fs_hz))
 
     def apply(self, values: np.ndarray, dt_s: float) -> np.ndarray:
         """The filtered signal(s), same shape as ``values`` (samples along axis 0)."""

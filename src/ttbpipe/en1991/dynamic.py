@@ -35,7 +35,7 @@ from ..stats.limits import DECK_VERTICAL_ACC_M_S2
 from ..structure import build_structure
 from ..structure import properties as structure_properties
 from ..structure.moving_loads import build_loads, simulate
-from ..structure.static import StructureStatic
+from ..structure.static import static_solver
 from ..trains import get_train
 
 log = logging.getLogger(__name__)
@@ -128,7 +128,7 @@ def static_midspan_deflection_m(span: SpanModel, train_name: str, step_m: float 
     model = span.model
     red = model.spans[0]
     o = model.dof_info["span_dof0"][0]
-    static = StructureStatic(model)
+    static = static_solver(model)
     mid_row = red.rows_at(0.5 * span.span_m)[0]
     xs = np.arange(0.0, span.span_m + 1e-9, step_m)
     influence = np.empty(xs.size)              # midspan deflection per downward unit load

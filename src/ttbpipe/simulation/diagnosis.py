@@ -40,11 +40,13 @@ def _d1_peak_mm(values: np.ndarray, dx: float) -> float:
     (4th-order Butterworth, forward-backward); the raw peak for records too short to filter."""
     from scipy import signal
 
+    from ..filters import butterworth_sos
+
     lo, hi = D1_BAND_M
     fs = 1.0 / dx
     if values.shape[1] < 64 or 1.0 / lo >= 0.5 * fs:
         return float(1e3 * np.abs(values).max())
-    sos = signal.butter(4, [1.0 / hi, 1.0 / lo], btype="bandpass", fs=fs, output="sos")
+    sos = butterworth_sos(4, (1.0 / hi, 1.0 / lo), "bandpass", fs)
     return float(1e3 * np.abs(signal.sosfiltfilt(sos, values, axis=1)).max())
 
 

@@ -94,10 +94,12 @@ def lowpass_peak(values: np.ndarray, dt: float, cutoff_hz: float) -> float:
     ``sosfiltfilt``); the raw max when the cutoff is at or above 0.95 of the Nyquist frequency."""
     from scipy import signal
 
+    from ..filters import butterworth_sos
+
     nyquist = 0.5 / dt
     if cutoff_hz >= 0.95 * nyquist:
         return float(np.max(np.abs(values)))
-    sos = signal.butter(4, cutoff_hz, fs=1.0 / dt, output="sos")
+    sos = butterworth_sos(4, float(cutoff_hz), "lowpass", 1.0 / dt)
     return float(np.max(np.abs(signal.sosfiltfilt(sos, values))))
 
 

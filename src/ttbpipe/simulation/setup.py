@@ -58,7 +58,9 @@ structure, the step and the static state.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import json
 import logging
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -68,7 +70,7 @@ import pandas as pd
 
 from ..irregularity.track_input import Irregularity, build_irregularity
 from ..structure.rail_mesh import RailMesh, no_rails, rail_inverse_masses, rail_mesh
-from ..structure.static import StructureStatic
+from ..structure.static import static_solver
 from ..timestepping.limits import (contact_time_step_limit, coupled_time_step_limit,
                                    resolve_time_step)
 from ..vehicle.contact import ContactGeometry, build_geometry
@@ -225,13 +227,40 @@ def rigid_packed():
         rail_n_nodes=0, rail_dof0=np.zeros(2, dtype=np.int64))
 
 
-def _structure(case: Mapping[str, Any], factors: Mapping[str, np.ndarray] | None):
-    from ..structure import apply_factors, build_structure
-    from ..structure.random_properties import property_factors
+#: The last nominal structures built in this process, by their configuration
+#: (:func:`_nominal_structure`); two, so that a batch alternating between two stays cached.
+_NOMINAL_STRUCTURES: dict[str, Any] = {}
+_NOMINAL_STRUCTURES_KEPT = 2
+
+
+def _nominal_structure(config: Mapping[str, Any], layout: Any):
+    """The structure of a ``structure:`` section and a layout, without random properties:
+    built once per process and configuration. Samples that share it (every scenario without
+    property fields) share one model, and with it its matrices, stability analysis and static
+    factorisation (:meth:`ttbpipe.structure.StructureModel.derived`): a model depends on its
+    configuration alone and is not changed after assembly, so a shared model gives the results
+    of a fresh one bit for bit (tests/test_structure_reuse.py)."""
+    from ..structure import build_structure
     from ..vehicle.curving import cant_knots
 
+    try:
+        key = json.dumps([config, layout], sort_keys=True, allow_nan=False)
+    except (TypeError, ValueError):   # not plain configuration data: build, do not keep
+        return build_structure(config, cant=cant_knots(layout))
+    if key not in _NOMINAL_STRUCTURES:
+        structure = build_structure(copy.deepcopy(dict(config)), cant=cant_knots(layout))
+        while len(_NOMINAL_STRUCTURES) >= _NOMINAL_STRUCTURES_KEPT:
+            _NOMINAL_STRUCTURES.pop(next(iter(_NOMINAL_STRUCTURES)))
+        _NOMINAL_STRUCTURES[key] = structure
+    return _NOMINAL_STRUCTURES[key]
+
+
+def _structure(case: Mapping[str, Any], factors: Mapping[str, np.ndarray] | None):
+    from ..structure import apply_factors
+    from ..structure.random_properties import property_factors
+
     layout = (case.get("simulation") or {}).get("layout")
-    structure = build_structure(case.get("structure") or {}, cant=cant_knots(layout))
+    structure = _nominal_structure(case.get("structure") or {}, layout)
     if factors is None:
         factors = property_factors(case.get("properties"), structure)
     if factors:
@@ -425,7 +454,7 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
                                   second["direction"],
                                   curve_arrays(second["model"], sim.get("layout"),
                                                second["direction"])))
-    sstatic = StructureStatic(structure) if structure is not None else None
+    sstatic = static_solver(structure) if structure is not None else None
     states, disp0, iters = static_equilibrium_trains(trains, mesh, sstatic)
     common = dict(dt=dt, n_steps=n_steps, out_every=out_every, structure=structure,
                   packed=packed, mesh=mesh, monitors=monitors, disp0=disp0,

@@ -59,6 +59,10 @@ class StructureModel:
     piers: list = field(default_factory=list)   # PierReduction per pier of a given height
     cant: tuple | None = None        # (x knots m, cant angle knots rad) of the track on the deck
     slab_element_track: np.ndarray | None = None   # track of each slab element (None: all 0)
+    # what is derived from the model alone (global matrices, stability analysis, static
+    # factorisation), computed on first use: a model is not changed after assembly
+    # (apply_factors and dataclasses.replace give new models, with an empty cache)
+    _derived: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def n_tracks(self) -> int:
@@ -76,9 +80,19 @@ class StructureModel:
     def rail_head_height_m(self) -> float:
         return float(self.config["rail"]["head_height_m"])
 
+    def derived(self, key: Any, compute):
+        """``compute()`` once per model and ``key``; later calls return the same object (the
+        callers treat it as read-only). Samples of a study that share the structure share
+        one model (:func:`ttbpipe.simulation.setup.prepare`), so its matrices, stability
+        analysis and static factorisation are made once per process."""
+        if key not in self._derived:
+            self._derived[key] = compute()
+        return self._derived[key]
+
     def matrices(self):
-        """Global sparse (M, K, C) assembled from the same arrays the kernels use."""
-        return assemble_matrices(self.packed)
+        """Global sparse (M, K, C) assembled from the same arrays the kernels use (once per
+        model; read-only)."""
+        return self.derived("matrices", lambda: assemble_matrices(self.packed))
 
     def stable_time_step(self, safety: float = 0.9) -> float:
         from ..timestepping.limits import stable_time_step

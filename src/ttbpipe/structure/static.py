@@ -28,3 +28,9 @@ class StructureStatic:
             raise RuntimeError("structure static solve gave non-finite displacements: the structure "
                                "has an unsupported mechanism; check its boundary conditions")
         return u
+
+
+def static_solver(structure_model) -> StructureStatic:
+    """The model's :class:`StructureStatic`, factorised once per model
+    (:meth:`ttbpipe.structure.StructureModel.derived`)."""
+    return structure_model.derived("static", lambda: StructureStatic(structure_model))

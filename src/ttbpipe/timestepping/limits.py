@@ -55,8 +55,19 @@ def stable_time_step(model, safety: float = 0.9, n_modes: int = 6) -> dict:
     standard form L^-1 K L^-T (M = L L^T, block-diagonal so L is cheap; ARPACK, ~0.05 s for
     the reference structure), give omega and the modal damping ratio
     zeta = x^T C x / (2 omega) with x = L^-T y; each mode allows dt = Omega_crit(zeta) / omega.
-    Returns the minimum times ``safety`` with its mode.
+    Returns the minimum times ``safety`` with its mode. The analysis is made once per model
+    (:meth:`ttbpipe.structure.StructureModel.derived`).
     """
+    derived = getattr(model, "derived", None)
+    best = (_stability_analysis(model, n_modes) if derived is None else
+            derived(("stability", n_modes), lambda: _stability_analysis(model, n_modes)))
+    best = dict(best)
+    best["dt_s"] = safety * best["dt_limit_s"]
+    return best
+
+
+def _stability_analysis(model, n_modes: int) -> dict:
+    """The mode with the smallest Zhai limit among the top ``n_modes`` (:func:`stable_time_step`)."""
     M, K, C = model.matrices()
     free = np.flatnonzero(~model.fixed)
     K, C = (A[free][:, free].tocsr() for A in (K, C))
@@ -82,7 +93,6 @@ def stable_time_step(model, safety: float = 0.9, n_modes: int = 6) -> dict:
         if best is None or dt < best["dt_limit_s"]:
             best = {"dt_limit_s": dt, "omega_rad_s": w, "frequency_hz": w / (2 * np.pi),
                     "zeta": zeta}
-    best["dt_s"] = safety * best["dt_limit_s"]
     best["omega_max_rad_s"] = float(np.sqrt(np.max(w2)))
     return best
 
