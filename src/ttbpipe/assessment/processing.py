@@ -106,8 +106,7 @@ class Butterworth:
         if kind == "highpass" and self.low_hz >= top:
             raise ValueError(f"{self.describe()}: the high-pass edge {self.low_hz:g} Hz is above "
                              f"0.95 x the Nyquist frequency {nyq:g} Hz of the history")
-        cut = tuple(float(c) for c in np.atleast_1d(cut)) if np.size(cut) > 1 else float(
-            np.atleast_1d(cut)[0])
+        cut = tuple(map(float, cut)) if np.ndim(cut) else float(cut)   # hashable: a cached design
         return butterworth_sos(int(self.order), cut, kind, float(fs_hz))
 
     def apply(self, values: np.ndarray, dt_s: float) -> np.ndarray:
