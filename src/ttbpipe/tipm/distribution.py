@@ -82,14 +82,18 @@ def fit_ordinate_distributions(population: PSDPopulation,
             for name in families:
                 dist = FAMILIES[name]
                 shape, _, scale = dist.fit(x, floc=0)
-                frozen = dist(shape, loc=0, scale=scale)
-                ks = stats.kstest(x, frozen.cdf)
+                # the distribution's methods with the parameters, not a frozen distribution:
+                # freezing builds its docstring, 1.4 ms a time, about a quarter of the stage
+                def cdf(v, dist=dist, shape=shape, scale=scale):
+                    return dist.cdf(v, shape, loc=0, scale=scale)
+
+                ks = stats.kstest(x, cdf)
                 if name == "lognorm":
                     ad = stats.anderson(np.log(x), "norm", method="interpolate")
                     ad_stat, ad_p = float(ad.statistic), float(ad.pvalue)
                 else:
-                    ad_stat, ad_p = _anderson_darling(frozen.cdf(x)), np.nan
-                loglik = float(np.sum(frozen.logpdf(x)))
+                    ad_stat, ad_p = _anderson_darling(cdf(x)), np.nan
+                loglik = float(np.sum(dist.logpdf(x, shape, loc=0, scale=scale)))
                 fits.append({"channel": channel, "spatial_frequency_per_m": float(freq),
                              "wavelength_m": 1.0 / float(freq), "family": name,
                              "shape": float(shape), "scale": float(scale),
