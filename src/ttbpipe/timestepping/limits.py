@@ -58,10 +58,7 @@ def stable_time_step(model, safety: float = 0.9, n_modes: int = 6) -> dict:
     Returns the minimum times ``safety`` with its mode. The analysis is made once per model
     (:meth:`ttbpipe.structure.StructureModel.derived`).
     """
-    derived = getattr(model, "derived", None)
-    best = (_stability_analysis(model, n_modes) if derived is None else
-            derived(("stability", n_modes), lambda: _stability_analysis(model, n_modes)))
-    best = dict(best)
+    best = dict(model.derived(("stability", n_modes), lambda: _stability_analysis(model, n_modes)))
     best["dt_s"] = safety * best["dt_limit_s"]
     return best
 
