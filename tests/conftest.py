@@ -9,11 +9,20 @@ caller set is kept.
 """
 
 import os
+from pathlib import Path
 
+from ttbpipe import code_version
+from ttbpipe.kernel_cache import refresh as refresh_kernel_cache
 from ttbpipe.threads import WORKER_ENV
 
 for _name, _value in WORKER_ENV.items():
     os.environ.setdefault(_name, _value)
+
+# Test modules cache kernels of their own (``njit(cache=True)``) that call ttbpipe's; numba keys
+# them on the test file alone, so after a change of ttbpipe they would run its old machine code
+# (a changed array layout aborts the process). They are dropped with ttbpipe's own when its
+# code changes (ttbpipe.kernel_cache).
+refresh_kernel_cache(Path(__file__).resolve().parent, code_version())
 
 
 def pytest_collection_modifyitems(config, items):

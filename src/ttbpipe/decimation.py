@@ -31,8 +31,9 @@ from numba import njit
 PASS_FRACTION = 0.8
 STOP_ATTENUATION_DB = 60.0
 
-#: Filter taps, ring buffers buffer[channel, tap], state = (next write position, samples pushed,
-#: rows written), decimation factor and delay in steps, and the output rows out[row, channel].
+#: Filter taps, the ring buffer buffer[tap, channel] (one row per sample: a push writes one
+#: contiguous row), state = (next write position, samples pushed, rows written), decimation
+#: factor and delay in steps, and the output rows out[row, channel].
 Decimator = namedtuple("Decimator", ["taps", "buffer", "state", "out_every", "delay", "out"])
 
 
@@ -54,7 +55,7 @@ def decimation_taps(out_every: int) -> np.ndarray:
 def decimator(n_channels: int, n_out: int, out_every: int) -> Decimator:
     """A decimator for ``n_channels`` histories giving ``n_out`` output rows."""
     taps = decimation_taps(out_every)
-    return Decimator(taps, np.zeros((n_channels, taps.size)), np.zeros(3, dtype=np.int64),
+    return Decimator(taps, np.zeros((taps.size, n_channels)), np.zeros(3, dtype=np.int64),
                      int(out_every), (taps.size - 1) // 2, np.zeros((n_out, n_channels)))
 
 
@@ -64,11 +65,16 @@ def _emit(dec, newest):
     ``newest`` (the row's own time)."""
     row = dec.state[2]
     n_taps = dec.taps.shape[0]
-    for c in range(dec.buffer.shape[0]):
-        s = 0.0
-        for j in range(n_taps):
-            s += dec.taps[j] * dec.buffer[c, (newest - j) % n_taps]
-        dec.out[row, c] = s
+    n_channels = dec.buffer.shape[1]
+    out = dec.out
+    for c in range(n_channels):
+        out[row, c] = 0.0
+    # tap by tap over contiguous rows (each channel sums its taps in the order j = 0, 1, ...)
+    for j in range(n_taps):
+        sample = dec.buffer[(newest - j) % n_taps]
+        tap = dec.taps[j]
+        for c in range(n_channels):
+            out[row, c] += tap * sample[c]
     dec.state[2] = row + 1
 
 
@@ -83,12 +89,12 @@ def push(dec, values):
     n_taps = dec.taps.shape[0]
     s = dec.state[1]
     if s == 0:
-        for c in range(values.shape[0]):
-            for j in range(n_taps):
-                dec.buffer[c, j] = values[c]
+        for j in range(n_taps):
+            for c in range(values.shape[0]):
+                dec.buffer[j, c] = values[c]
     pos = s % n_taps
     for c in range(values.shape[0]):
-        dec.buffer[c, pos] = values[c]
+        dec.buffer[pos, c] = values[c]
     dec.state[1] = s + 1
     k = dec.state[2]
     if k < dec.out.shape[0] and k * dec.out_every + dec.delay == s:
@@ -99,9 +105,9 @@ def push(dec, values):
 def flush(dec):
     """After the last step: hold the last sample until every output row is written."""
     n_taps = dec.taps.shape[0]
-    last = np.empty(dec.buffer.shape[0])
+    last = np.empty(dec.buffer.shape[1])
     pos = (dec.state[1] - 1) % n_taps
-    for c in range(dec.buffer.shape[0]):
-        last[c] = dec.buffer[c, pos]
+    for c in range(dec.buffer.shape[1]):
+        last[c] = dec.buffer[pos, c]
     while dec.state[2] < dec.out.shape[0]:
         push(dec, last)
