@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 from numba import njit  # noqa: E402
 
 from ttbpipe.structure import build_structure  # noqa: E402
-from ttbpipe.structure.kernels import _beam_forces, _triple_forces  # noqa: E402
+from ttbpipe.structure.kernels import _EVERY_ELEMENT, _beam_forces, _triple_forces  # noqa: E402
 
 
 @njit(cache=True)
@@ -104,14 +104,14 @@ def _triple_forces_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scra
 def _repeat_beams_today(packs, disp, vel, force, calls):
     for _ in range(calls):
         for k in range(len(packs)):
-            _beam_forces(packs[k], disp[k], vel[k], force[k])
+            _beam_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
 
 
 @njit(cache=True)
 def _repeat_triples_today(packs, disp, vel, force, calls):
     for _ in range(calls):
         for k in range(len(packs)):
-            _triple_forces(packs[k], disp[k], vel[k], force[k])
+            _triple_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
 
 
 @njit(cache=True)

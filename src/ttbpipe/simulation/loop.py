@@ -26,9 +26,10 @@ import numpy as np
 from numba import njit
 
 from ..irregularity.track_input import irregularity_at
-from ..structure.kernels import structure_accelerations
+from ..structure.kernels import structure_accelerations, windowed_structure_accelerations
 from ..structure.monitors import no_monitors, record_monitors
 from ..structure.rail_mesh import add_rail_contact_load, add_rail_head_load, rail_point_kinematics
+from ..structure.window import no_window, track_window, update_window
 from ..timestepping.zhai import zhai_predict
 from ..vehicle.dynamics import _work, vehicle_accelerations
 from ..vehicle.contact import N_COLS
@@ -159,14 +160,31 @@ def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, first):
 
 
 @njit(cache=True)
-def _evaluate(t, state, placed, work, packed, mesh, ws_x, rail_kin, first):
+def _move_window(t, state, placed, window):
+    """The track window (:mod:`ttbpipe.structure.window`) over the train's wheelsets at time t."""
+    if window.n_segments == 0:
+        return
+    x_low = np.inf
+    x_high = -np.inf
+    for w in range(placed.vehicle.ws_x0.shape[0]):
+        x = placed.direction * (placed.vehicle.ws_x0[w] + placed.speed * t)
+        x_low = min(x_low, x)
+        x_high = max(x_high, x)
+    update_window(window, x_low, x_high, state.vel, state.acc, state.acc_prev)
+
+
+@njit(cache=True)
+def _evaluate(t, state, placed, work, packed, window, mesh, ws_x, rail_kin, first):
     """Accelerations of train and structure at time t for the current displacements and
-    velocities (``work.wheel``: the wheel table of this evaluation; :func:`_train_loads`)."""
+    velocities (``work.wheel``: the wheel table of this evaluation; :func:`_train_loads`), the
+    track outside ``window`` frozen."""
     nodal_force = state.nodal_force
     for i in range(nodal_force.shape[0]):
         nodal_force[i] = 0.0
+    _move_window(t, state, placed, window)
     _train_loads(t, state, placed, work, mesh, ws_x, rail_kin, first)
-    structure_accelerations(packed, state.disp, state.vel, nodal_force, state.acc)
+    windowed_structure_accelerations(packed, window, state.disp, state.vel, nodal_force,
+                                     state.acc)
 
 
 @njit(cache=True)
@@ -180,8 +198,11 @@ def _advance(u, v, a, a_prev, dt, psi):
 
 
 @njit(cache=True)
-def _coupled_loop(state, placed, packed, mesh, monitors, train, dt, n_steps, out_every):
+def _coupled_loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_every):
     """Zhai explicit integration of train + structure; returns (status, step).
+
+    ``window``: the approach track that moves (:mod:`ttbpipe.structure.window`; ``no_window``:
+    all of it).
 
     ``placed``: the train, its track input, speed, creep factor and placement
     (:data:`PlacedTrain`). Output every ``out_every`` steps (row 0 = t 0) into ``train``
@@ -197,14 +218,15 @@ def _coupled_loop(state, placed, packed, mesh, monitors, train, dt, n_steps, out
     work = _work(state.q.shape[0], n_ws, N_COLS, max(vehicle.zones.shape[0], 1))
     q, v, a, a_prev = state.q, state.v, state.a, state.a_prev
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
-    _evaluate(0.0, state, placed, work, packed, mesh, ws_x, rail_kin, True)
+    _evaluate(0.0, state, placed, work, packed, window, mesh, ws_x, rail_kin, True)
     out_row = 0
     for n in range(-1, n_steps):
         if n >= 0:
             psi = 0.0 if n == 0 else 0.5
             _advance(q, v, a, a_prev, dt, psi)
             _advance(disp, vel, acc, acc_prev, dt, psi)
-            _evaluate((n + 1) * dt, state, placed, work, packed, mesh, ws_x, rail_kin, False)
+            _evaluate((n + 1) * dt, state, placed, work, packed, window, mesh, ws_x, rail_kin,
+                      False)
         step = n + 1
         if record_wheel_step(train, work.wheel, step) == 0:
             return 2, n
@@ -385,6 +407,14 @@ def _placed(setup) -> PlacedTrain:
                        int(setup.direction))
 
 
+def _window(setup, monitors):
+    """A fresh track window of a run (``simulation.track_window_m``; its monitored DOFs always
+    move), or none."""
+    if setup.structure is None or setup.track_window_m is None:
+        return no_window(setup.packed)
+    return track_window(setup.structure, setup.track_window_m, keep_dofs=monitors.dof)
+
+
 def _integrate_pair(setup) -> RawResult:
     """:func:`integrate` of a two-train run (``setup.second``)."""
     second = setup.second
@@ -425,8 +455,9 @@ def integrate(setup) -> RawResult:
     monitors = setup.monitors.recorder() if setup.monitors is not None else no_monitors()
     train = _recorder(setup, monitors.qty.shape[0])
     t0 = time.perf_counter()
-    status, step = _coupled_loop(state, _placed(setup), setup.packed, setup.mesh, monitors, train,
-                                 setup.dt, setup.n_steps, setup.out_every)
+    status, step = _coupled_loop(state, _placed(setup), setup.packed, _window(setup, monitors),
+                                 setup.mesh, monitors, train, setup.dt, setup.n_steps,
+                                 setup.out_every)
     wall = time.perf_counter() - t0
     if status != 0:
         raise SimulationStopped(setup, status, step, train.contact_loss, state.q)

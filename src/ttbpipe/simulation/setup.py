@@ -71,6 +71,7 @@ import pandas as pd
 from ..irregularity.track_input import Irregularity, build_irregularity
 from ..structure.rail_mesh import RailMesh, no_rails, rail_inverse_masses, rail_mesh
 from ..structure.static import static_solver
+from ..structure.window import DEFAULT_TRACK_WINDOW_M
 from ..timestepping.limits import (contact_time_step_limit, coupled_time_step_limit,
                                    resolve_time_step)
 from ..vehicle.contact import ContactGeometry, build_geometry
@@ -127,6 +128,7 @@ class CoupledSetup:
     direction: int = 1         # 1: runs +x, -1: runs -x (its axes turned about z)
     second: Any = None         # the second train's CoupledSetup in a two-train run
     label: str = ""            # its columns' and indices' prefix ("train2_"; "" for the first)
+    track_window_m: float | None = None   # approach track moving near the train (None: all)
 
     @property
     def n_spans(self) -> int:
@@ -309,6 +311,15 @@ def _wheel_range(x_lead0: float, x_end: float, train_len: float, direction: int,
     return x_end - reach - 1.0, x_lead0 + train_len + 1.0
 
 
+def _track_window_m(sim: Mapping[str, Any], second_cfg) -> float | None:
+    """``simulation.track_window_m`` (:mod:`ttbpipe.structure.window`); a two-train run moves
+    the whole track (its loop takes no window)."""
+    margin = sim.get("track_window_m", DEFAULT_TRACK_WINDOW_M)
+    if margin is None or second_cfg is not None:
+        return None
+    return float(margin)
+
+
 def _time_step(sim, model, geom, speed, structure, mesh, packed, propose_auto):
     """(dt, limits) of one train on the structure (every stability limit, resolve_time_step)."""
     limits = contact_time_step_limit(model, geom, speed,
@@ -458,7 +469,8 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
     states, disp0, iters = static_equilibrium_trains(trains, mesh, sstatic)
     common = dict(dt=dt, n_steps=n_steps, out_every=out_every, structure=structure,
                   packed=packed, mesh=mesh, monitors=monitors, disp0=disp0,
-                  static_iterations=iters, propose_auto=propose_auto)
+                  static_iterations=iters, propose_auto=propose_auto,
+                  track_window_m=_track_window_m(sim, second_cfg))
 
     def train_setup(tr, state, train_params, limits, x0, track_i, irr_config, label):
         from .diagnosis import irregularity_indicators

@@ -51,7 +51,7 @@ StructurePacked.__new__.__defaults__ = (
 
 
 @njit(cache=True)
-def _beam_forces(packed, disp, vel, force):
+def _beam_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the elastic forces K_e u_e of every beam element (rails and slab) from ``force``.
 
     Hermite element, slopes as DOFs: k = EI/L^3 [[12, 6L, -12, 6L], [6L, 4L^2, -6L, 2L^2],
@@ -60,56 +60,58 @@ def _beam_forces(packed, disp, vel, force):
     Beams carry no internal damping (pads and CA carry it).
     """
     n_beam = packed.beam_L.shape[0]
-    for e in range(n_beam):
-        a = packed.beam_dof_a[e]
-        b = packed.beam_dof_b[e]
-        L = packed.beam_L[e]
-        for plane in range(2):
-            off = 2 * plane
-            EI = packed.beam_EIv[e] if plane == 0 else packed.beam_EIl[e]
-            s = EI / (L * L * L)
-            w1 = disp[a + off]
-            t1 = disp[a + off + 1]
-            w2 = disp[b + off]
-            t2 = disp[b + off + 1]
-            dw = w1 - w2
-            f1 = s * (12.0 * dw + 6.0 * L * (t1 + t2))
-            m1 = s * L * (6.0 * dw + L * (4.0 * t1 + 2.0 * t2))
-            m2 = s * L * (6.0 * dw + L * (2.0 * t1 + 4.0 * t2))
-            force[a + off] -= f1
-            force[a + off + 1] -= m1
-            force[b + off] += f1
-            force[b + off + 1] -= m2
-        kt = packed.beam_GK[e] / L * (disp[a + 4] - disp[b + 4])
-        force[a + 4] -= kt
-        force[b + 4] += kt
+    for k in range(n_ranges):
+        for e in range(ranges[k, 0], ranges[k, 1] if ranges[k, 1] >= 0 else n_beam):
+            a = packed.beam_dof_a[e]
+            b = packed.beam_dof_b[e]
+            L = packed.beam_L[e]
+            for plane in range(2):
+                off = 2 * plane
+                EI = packed.beam_EIv[e] if plane == 0 else packed.beam_EIl[e]
+                s = EI / (L * L * L)
+                w1 = disp[a + off]
+                t1 = disp[a + off + 1]
+                w2 = disp[b + off]
+                t2 = disp[b + off + 1]
+                dw = w1 - w2
+                f1 = s * (12.0 * dw + 6.0 * L * (t1 + t2))
+                m1 = s * L * (6.0 * dw + L * (4.0 * t1 + 2.0 * t2))
+                m2 = s * L * (6.0 * dw + L * (2.0 * t1 + 4.0 * t2))
+                force[a + off] -= f1
+                force[a + off + 1] -= m1
+                force[b + off] += f1
+                force[b + off + 1] -= m2
+            kt = packed.beam_GK[e] / L * (disp[a + 4] - disp[b + 4])
+            force[a + 4] -= kt
+            force[b + 4] += kt
 
 
 @njit(cache=True)
-def _link_forces(packed, disp, vel, force):
+def _link_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every spring-damper link from ``force``.
 
     Link l: relative displacement d = sum_j coef_j u[dof_j] (and d' likewise from ``vel``); force
     p = k d + c d'; generalised forces coef_j * p are subtracted (virtual work, paper eq. 4).
     """
     n_link = packed.link_k.shape[0]
-    for l in range(n_link):
-        j0 = packed.link_ptr[l]
-        j1 = packed.link_ptr[l + 1]
-        d = 0.0
-        v = 0.0
-        for j in range(j0, j1):
-            q = packed.link_dof[j]
-            c = packed.link_coef[j]
-            d += c * disp[q]
-            v += c * vel[q]
-        p = packed.link_k[l] * d + packed.link_c[l] * v
-        for j in range(j0, j1):
-            force[packed.link_dof[j]] -= packed.link_coef[j] * p
+    for k in range(n_ranges):
+        for l in range(ranges[k, 0], ranges[k, 1] if ranges[k, 1] >= 0 else n_link):
+            j0 = packed.link_ptr[l]
+            j1 = packed.link_ptr[l + 1]
+            d = 0.0
+            v = 0.0
+            for j in range(j0, j1):
+                q = packed.link_dof[j]
+                c = packed.link_coef[j]
+                d += c * disp[q]
+                v += c * vel[q]
+            p = packed.link_k[l] * d + packed.link_c[l] * v
+            for j in range(j0, j1):
+                force[packed.link_dof[j]] -= packed.link_coef[j] * p
 
 
 @njit(cache=True)
-def _triple_forces(packed, disp, vel, force):
+def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every link triple (CA quadrature points; rail pads and ballast have
     compact kernels of their own).
 
@@ -119,39 +121,40 @@ def _triple_forces(packed, disp, vel, force):
     over the DOFs (measured 1.5x faster for the pads).
     """
     n_tri = packed.tri_k.shape[0] // 3
-    for t in range(n_tri):
-        j0 = packed.tri_ptr[t]
-        j1 = packed.tri_ptr[t + 1]
-        d0 = 0.0
-        d1 = 0.0
-        d2 = 0.0
-        v0 = 0.0
-        v1 = 0.0
-        v2 = 0.0
-        for j in range(j0, j1):
-            q = packed.tri_dof[j]
-            u = disp[q]
-            w = vel[q]
-            c0 = packed.tri_coef[3 * j]
-            c1 = packed.tri_coef[3 * j + 1]
-            c2 = packed.tri_coef[3 * j + 2]
-            d0 += c0 * u
-            d1 += c1 * u
-            d2 += c2 * u
-            v0 += c0 * w
-            v1 += c1 * w
-            v2 += c2 * w
-        p0 = packed.tri_k[3 * t] * d0 + packed.tri_c[3 * t] * v0
-        p1 = packed.tri_k[3 * t + 1] * d1 + packed.tri_c[3 * t + 1] * v1
-        p2 = packed.tri_k[3 * t + 2] * d2 + packed.tri_c[3 * t + 2] * v2
-        for j in range(j0, j1):
-            force[packed.tri_dof[j]] -= (packed.tri_coef[3 * j] * p0
-                                         + packed.tri_coef[3 * j + 1] * p1
-                                         + packed.tri_coef[3 * j + 2] * p2)
+    for k in range(n_ranges):
+        for t in range(ranges[k, 0], ranges[k, 1] if ranges[k, 1] >= 0 else n_tri):
+            j0 = packed.tri_ptr[t]
+            j1 = packed.tri_ptr[t + 1]
+            d0 = 0.0
+            d1 = 0.0
+            d2 = 0.0
+            v0 = 0.0
+            v1 = 0.0
+            v2 = 0.0
+            for j in range(j0, j1):
+                q = packed.tri_dof[j]
+                u = disp[q]
+                w = vel[q]
+                c0 = packed.tri_coef[3 * j]
+                c1 = packed.tri_coef[3 * j + 1]
+                c2 = packed.tri_coef[3 * j + 2]
+                d0 += c0 * u
+                d1 += c1 * u
+                d2 += c2 * u
+                v0 += c0 * w
+                v1 += c1 * w
+                v2 += c2 * w
+            p0 = packed.tri_k[3 * t] * d0 + packed.tri_c[3 * t] * v0
+            p1 = packed.tri_k[3 * t + 1] * d1 + packed.tri_c[3 * t + 1] * v1
+            p2 = packed.tri_k[3 * t + 2] * d2 + packed.tri_c[3 * t + 2] * v2
+            for j in range(j0, j1):
+                force[packed.tri_dof[j]] -= (packed.tri_coef[3 * j] * p0
+                                             + packed.tri_coef[3 * j + 1] * p1
+                                             + packed.tri_coef[3 * j + 2] * p2)
 
 
 @njit(cache=True)
-def _pad_forces(packed, disp, vel, force):
+def _pad_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every rail pad (fastener): vertical, lateral and roll spring-dampers
     between a rail node and its seat (paper eq. 22).
 
@@ -184,68 +187,69 @@ def _pad_forces(packed, disp, vel, force):
     geom = packed.pad_geom
     kk = packed.pad_k
     cc = packed.pad_c
-    for p in range(n_pad):
-        rd = rail[p]
-        e = geom[3 * p + 2]
-        dz = disp[rd]
-        dy = disp[rd + 2] + d_f * disp[rd + 4]
-        dr = disp[rd + 4]
-        vz = vel[rd]
-        vy = vel[rd + 2] + d_f * vel[rd + 4]
-        vr = vel[rd + 4]
-        da = seat_a[p]
-        db = seat_b[p]
-        sd = da
-        xi = 0.0
-        wa = 1.0
-        n1 = n2 = n3 = n4 = 0.0
-        if p < n_slab:
-            xi = geom[3 * p]
-            n1, n2, n3, n4 = hermite(xi, geom[3 * p + 1])
-            wa = 1.0 - xi
-            rs = wa * disp[da + 4] + xi * disp[db + 4]
-            vrs = wa * vel[da + 4] + xi * vel[db + 4]
-            dz -= n1 * disp[da] + n2 * disp[da + 1] + n3 * disp[db] + n4 * disp[db + 1] + e * rs
-            dy += t_half * rs - (n1 * disp[da + 2] + n2 * disp[da + 3] + n3 * disp[db + 2]
-                                 + n4 * disp[db + 3])
-            dr -= rs
-            vz -= n1 * vel[da] + n2 * vel[da + 1] + n3 * vel[db] + n4 * vel[db + 1] + e * vrs
-            vy += t_half * vrs - (n1 * vel[da + 2] + n2 * vel[da + 3] + n3 * vel[db + 2]
-                                  + n4 * vel[db + 3])
-            vr -= vrs
-        elif p < n_slab + n_ballast:
-            dz -= disp[sd] + e * disp[sd + 2]
-            dy -= disp[sd + 1]
-            dr -= disp[sd + 2]
-            vz -= vel[sd] + e * vel[sd + 2]
-            vy -= vel[sd + 1]
-            vr -= vel[sd + 2]
-        pz = kk[3 * p] * dz + cc[3 * p] * vz
-        py = kk[3 * p + 1] * dy + cc[3 * p + 1] * vy
-        pr = kk[3 * p + 2] * dr + cc[3 * p + 2] * vr
-        force[rd] -= pz
-        force[rd + 2] -= py
-        force[rd + 4] -= d_f * py + pr
-        if p < n_slab:
-            force[da] += n1 * pz
-            force[da + 1] += n2 * pz
-            force[db] += n3 * pz
-            force[db + 1] += n4 * pz
-            force[da + 2] += n1 * py
-            force[da + 3] += n2 * py
-            force[db + 2] += n3 * py
-            force[db + 3] += n4 * py
-            q = e * pz - t_half * py + pr
-            force[da + 4] += wa * q
-            force[db + 4] += xi * q
-        elif p < n_slab + n_ballast:
-            force[sd] += pz
-            force[sd + 1] += py
-            force[sd + 2] += e * pz + pr
+    for k in range(n_ranges):
+        for p in range(ranges[k, 0], ranges[k, 1] if ranges[k, 1] >= 0 else n_pad):
+            rd = rail[p]
+            e = geom[3 * p + 2]
+            dz = disp[rd]
+            dy = disp[rd + 2] + d_f * disp[rd + 4]
+            dr = disp[rd + 4]
+            vz = vel[rd]
+            vy = vel[rd + 2] + d_f * vel[rd + 4]
+            vr = vel[rd + 4]
+            da = seat_a[p]
+            db = seat_b[p]
+            sd = da
+            xi = 0.0
+            wa = 1.0
+            n1 = n2 = n3 = n4 = 0.0
+            if p < n_slab:
+                xi = geom[3 * p]
+                n1, n2, n3, n4 = hermite(xi, geom[3 * p + 1])
+                wa = 1.0 - xi
+                rs = wa * disp[da + 4] + xi * disp[db + 4]
+                vrs = wa * vel[da + 4] + xi * vel[db + 4]
+                dz -= n1 * disp[da] + n2 * disp[da + 1] + n3 * disp[db] + n4 * disp[db + 1] + e * rs
+                dy += t_half * rs - (n1 * disp[da + 2] + n2 * disp[da + 3] + n3 * disp[db + 2]
+                                     + n4 * disp[db + 3])
+                dr -= rs
+                vz -= n1 * vel[da] + n2 * vel[da + 1] + n3 * vel[db] + n4 * vel[db + 1] + e * vrs
+                vy += t_half * vrs - (n1 * vel[da + 2] + n2 * vel[da + 3] + n3 * vel[db + 2]
+                                      + n4 * vel[db + 3])
+                vr -= vrs
+            elif p < n_slab + n_ballast:
+                dz -= disp[sd] + e * disp[sd + 2]
+                dy -= disp[sd + 1]
+                dr -= disp[sd + 2]
+                vz -= vel[sd] + e * vel[sd + 2]
+                vy -= vel[sd + 1]
+                vr -= vel[sd + 2]
+            pz = kk[3 * p] * dz + cc[3 * p] * vz
+            py = kk[3 * p + 1] * dy + cc[3 * p + 1] * vy
+            pr = kk[3 * p + 2] * dr + cc[3 * p + 2] * vr
+            force[rd] -= pz
+            force[rd + 2] -= py
+            force[rd + 4] -= d_f * py + pr
+            if p < n_slab:
+                force[da] += n1 * pz
+                force[da + 1] += n2 * pz
+                force[db] += n3 * pz
+                force[db + 1] += n4 * pz
+                force[da + 2] += n1 * py
+                force[da + 3] += n2 * py
+                force[db + 2] += n3 * py
+                force[db + 3] += n4 * py
+                q = e * pz - t_half * py + pr
+                force[da + 4] += wa * q
+                force[db + 4] += xi * q
+            elif p < n_slab + n_ballast:
+                force[sd] += pz
+                force[sd + 1] += py
+                force[sd + 2] += e * pz + pr
 
 
 @njit(cache=True)
-def _ballast_forces(packed, disp, vel, force):
+def _ballast_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of the ballasted track under the rails (Zhai's model; paper 2.1 (2)).
 
     Per sleeper j (z, y, roll at ``bal_sleeper[j]``) two ballast blocks (z at ``bal_block[j]``
@@ -262,26 +266,32 @@ def _ballast_forces(packed, disp, vel, force):
     sleeper = packed.bal_sleeper
     block = packed.bal_block
     nxt = packed.bal_next
-    for j in range(sleeper.shape[0]):
-        sd = sleeper[j]
-        zs = disp[sd]
-        rs = disp[sd + 2]
-        vzs = vel[sd]
-        vrs = vel[sd + 2]
-        force[sd + 1] -= ky * disp[sd + 1] + cy * vel[sd + 1]
-        for side in range(2):
-            es = e if side == 0 else -e
-            bd = block[j] + side
-            zb = disp[bd]
-            vb = vel[bd]
-            p0 = kz * (zs + es * rs - zb) + cz * (vzs + es * vrs - vb)
-            force[sd] -= p0
-            force[sd + 2] -= es * p0
-            force[bd] += p0 - (ksub * zb + csub * vb)
-            if nxt[j] != 0:
-                p2 = ksh * (zb - disp[bd + 2]) + csh * (vb - vel[bd + 2])
-                force[bd] -= p2
-                force[bd + 2] += p2
+    for k in range(n_ranges):
+        for j in range(ranges[k, 0], ranges[k, 1] if ranges[k, 1] >= 0 else sleeper.shape[0]):
+            sd = sleeper[j]
+            zs = disp[sd]
+            rs = disp[sd + 2]
+            vzs = vel[sd]
+            vrs = vel[sd + 2]
+            force[sd + 1] -= ky * disp[sd + 1] + cy * vel[sd + 1]
+            for side in range(2):
+                es = e if side == 0 else -e
+                bd = block[j] + side
+                zb = disp[bd]
+                vb = vel[bd]
+                p0 = kz * (zs + es * rs - zb) + cz * (vzs + es * vrs - vb)
+                force[sd] -= p0
+                force[sd + 2] -= es * p0
+                force[bd] += p0 - (ksub * zb + csub * vb)
+                if nxt[j] != 0:
+                    p2 = ksh * (zb - disp[bd + 2]) + csh * (vb - vel[bd + 2])
+                    force[bd] -= p2
+                    force[bd + 2] += p2
+
+
+#: Element ranges meaning "every element" ([start, end) rows; end -1: to the last element), a
+#: compile-time constant of the kernels.
+_EVERY_ELEMENT = np.array([[0, -1]], dtype=np.int64)
 
 
 @njit(cache=True)
@@ -291,16 +301,40 @@ def structure_accelerations(packed, disp, vel, nodal_force, acc_out):
     ``nodal_force`` holds the external loads only and is not modified. Diagonal-mass DOFs use
     ``inv_mass`` (0 for fixed DOFs); each girder span block uses its dense inverse mass.
     """
+    _accelerations(packed, disp, vel, nodal_force, acc_out, packed.inv_mass, _EVERY_ELEMENT, 1,
+                   _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1)
+
+
+@njit(cache=True)
+def windowed_structure_accelerations(packed, window, disp, vel, nodal_force, acc_out):
+    """:func:`structure_accelerations` with the track outside a window frozen
+    (:mod:`ttbpipe.structure.window`): only the elements in the window's ranges are evaluated
+    (those with a DOF that moves), and the frozen DOFs have a zero inverse mass
+    (``window.inv_mass``), like fixed DOFs. ``window.n_ranges`` counts the rows of each
+    element kind's ranges (beams, links, pads, ballast, link triples). A window without
+    segments (:func:`ttbpipe.structure.window.no_window`) gives
+    :func:`structure_accelerations` bit for bit."""
+    n = window.n_ranges
+    _accelerations(packed, disp, vel, nodal_force, acc_out, window.inv_mass,
+                   window.beam_ranges, n[0], window.link_ranges, n[1], window.pad_ranges, n[2],
+                   window.ballast_ranges, n[3], window.triple_ranges, n[4])
+
+
+@njit(cache=True)
+def _accelerations(packed, disp, vel, nodal_force, acc_out, inv_mass, beams, n_beams, links,
+                   n_links, pads, n_pads, ballast, n_ballast, triples, n_triples):
+    """The accelerations with the given diagonal inverse mass, evaluating the elements in the
+    given ranges of each kind (rows [start, end) of element indices, the first ``n_*`` rows)."""
     n = packed.n_dof
     for i in range(n):
         acc_out[i] = nodal_force[i]
-    _beam_forces(packed, disp, vel, acc_out)
-    _link_forces(packed, disp, vel, acc_out)
-    _pad_forces(packed, disp, vel, acc_out)
-    _ballast_forces(packed, disp, vel, acc_out)
-    _triple_forces(packed, disp, vel, acc_out)
+    _beam_forces(packed, disp, vel, acc_out, beams, n_beams)
+    _link_forces(packed, disp, vel, acc_out, links, n_links)
+    _pad_forces(packed, disp, vel, acc_out, pads, n_pads)
+    _ballast_forces(packed, disp, vel, acc_out, ballast, n_ballast)
+    _triple_forces(packed, disp, vel, acc_out, triples, n_triples)
     for i in range(packed.n_diag):
-        acc_out[i] *= packed.inv_mass[i]
+        acc_out[i] *= inv_mass[i]
     tmp = packed.span_scratch
     for s in range(packed.span_dof0.shape[0]):
         o = packed.span_dof0[s]

@@ -174,6 +174,8 @@ def build_case(sim: Mapping[str, Any], structure: Mapping[str, Any], *,
            "deck_filter_hz": float(sim["deck_filter_hz"])}
     if sim.get("end_x_m") is not None:
         run["end_x_m"] = float(sim["end_x_m"])
+    if sim.get("track_window_m") is not None:
+        run["track_window_m"] = float(sim["track_window_m"])
     case = {"structure": copy.deepcopy(dict(structure)), "train": copy.deepcopy(sim["train"]),
             "simulation": run, "irregularity": dict(irregularity)}
     if properties:
