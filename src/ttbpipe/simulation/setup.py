@@ -315,7 +315,11 @@ def _track_window_m(sim: Mapping[str, Any], second_cfg) -> float | None:
     """``simulation.track_window_m`` (:mod:`ttbpipe.structure.window`); a two-train run moves
     the whole track (its loop takes no window)."""
     margin = sim.get("track_window_m", DEFAULT_TRACK_WINDOW_M)
-    if margin is None or second_cfg is not None:
+    if margin is None:
+        return None
+    if second_cfg is not None:
+        log.warning("simulation.track_window_m: %s m not applied: a two-train run moves the "
+                    "whole track", margin)
         return None
     return float(margin)
 
