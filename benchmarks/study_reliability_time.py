@@ -1,13 +1,14 @@
 """Time the reliability table of a finished study (its tail fits with their goodness of fit).
 
-    python benchmarks/bench_study_reliability.py [--results results]
+    python benchmarks/study_reliability_time.py [--results results]
         [--configfile config/config.yaml] [--rounds 3]
 
 Reads the batch files of a finished study under ``--results`` (``snakemake --cores 2`` first) and
 builds its reliability table as :func:`ttbpipe.study.outputs.aggregate_study` does (the limits of
 ``limits:`` and the assessed indices, :func:`ttbpipe.stats.reliability.assess_limits` in one
 process), ``--rounds`` times. Prints the wall time (median, minimum) and the number of tail
-fits, with ``FIGURE`` lines for benchmarks/compare_revisions.py. Timings only.
+fits, with ``FIGURE`` lines for benchmarks/compare_revisions.py (not a ``bench_*`` script:
+benchmarks/run_all.py has no finished study to read). Timings only.
 """
 
 from __future__ import annotations

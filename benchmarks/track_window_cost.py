@@ -1,16 +1,17 @@
 """Time loop with the moving track window (``simulation.track_window_m``) against the whole track.
 
-    NUMBA_NUM_THREADS=1 python benchmarks/bench_track_window.py [--case config/reference_case.yaml
+    NUMBA_NUM_THREADS=1 python benchmarks/track_window_cost.py [--case config/reference_case.yaml
         | --study config/config.yaml] [--margins 20 10] [--rounds 5] [--duration S]
 
 Runs the case with the whole track and with each margin, the runs alternating round by round in
 one process (the machine's load hits all alike; ``--study``: the study's single sample, its
 structure, train and simulation settings on the mean-spectrum profile), and prints per variant
-the median and minimum CPU time per step of the loop, the ratio to the whole track, and the largest relative difference
-of the wheel-force peaks (max P, min P, max |Q|, max Q/P of every wheel) and of the structure's
-monitored peaks (without the unfiltered rail accelerations, listed apart). ``FIGURE`` lines for
-benchmarks/run_all.py. Method and decision: docs/performance.md ("Moving window over the
-approach track").
+the median and minimum CPU time per step of the loop, the ratio to the whole track, and the
+largest relative difference of the wheel-force peaks (max P, min P, max |Q|, max Q/P of every
+wheel) and of the structure's monitored peaks (without the unfiltered rail accelerations,
+listed apart), with ``FIGURE`` lines (benchmarks/compare_revisions.py). Not a ``bench_*``
+script: a few minutes, too long for benchmarks/run_all.py. Method and decision:
+docs/performance.md ("Moving window over the approach track").
 """
 
 from __future__ import annotations
