@@ -28,6 +28,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from .kernels import _EVERY_ELEMENT
+
 #: Segment length of the window's bookkeeping (m): a few fastener bays, longer than any element.
 SEGMENT_M = 5.0
 #: ``simulation.track_window_m`` when a case does not give it (None: the whole track moves).
@@ -36,22 +38,21 @@ DEFAULT_TRACK_WINDOW_M = None
 #: The window of a run: its segments (which always move, which move now, the active range
 #: of the last update), each diagonal DOF's segment (-1: always moves), the structure's
 #: inverse mass and the working copy with the frozen DOFs at 0, each element's lowest segment
-#: (-1: always evaluated), whether it is evaluated now (``*_on``), and the evaluated elements
-#: as ranges (``*_ranges`` rows [start, end), ``n_ranges`` rows of beams, links, pads, ballast,
-#: link triples), which the kernels loop over
-#: (:func:`ttbpipe.structure.kernels.windowed_structure_accelerations`).
+#: (-1: always evaluated), and the evaluated elements as ranges (``*_ranges`` rows [start,
+#: end), ``n_ranges`` rows of beams, links, pads, ballast, link triples), which the kernels
+#: loop over (:func:`ttbpipe.structure.kernels.windowed_structure_accelerations`).
 TrackWindow = namedtuple("TrackWindow", [
     "n_segments", "segment_m", "margin_m", "segment_always", "segment_on", "active",
     "dof_segment", "base_inv_mass", "inv_mass",
     "beam_segment", "link_segment", "pad_segment", "ballast_segment", "triple_segment",
-    "beam_on", "link_on", "pad_on", "ballast_on", "triple_on",
     "beam_ranges", "link_ranges", "pad_ranges", "ballast_ranges", "triple_ranges", "n_ranges",
 ])
 
 
 def _every(n_rows: int = 1) -> np.ndarray:
+    """Ranges of ``n_rows`` rows whose first is the kernels' "every element" row."""
     ranges = np.zeros((n_rows, 2), dtype=np.int64)
-    ranges[0, 1] = -1                      # row [0, -1): every element
+    ranges[0] = _EVERY_ELEMENT[0]
     return ranges
 
 
@@ -60,7 +61,7 @@ def no_window(packed) -> TrackWindow:
     i0, u0 = np.zeros(0, np.int64), np.zeros(0, np.uint8)
     return TrackWindow(0, SEGMENT_M, np.inf, u0, u0.copy(), np.zeros(2, np.int64), i0,
                        packed.inv_mass, packed.inv_mass, i0, i0, i0, i0, i0,
-                       u0, u0, u0, u0, u0, _every(), _every(), _every(), _every(), _every(),
+                       _every(), _every(), _every(), _every(), _every(),
                        np.ones(5, dtype=np.int64))
 
 
@@ -152,35 +153,30 @@ def track_window(model, margin_m: float, keep_dofs=()) -> TrackWindow:
     return TrackWindow(n_seg, SEGMENT_M, margin_m, always, always.copy(),
                        np.array([-1, -1], np.int64), dof_segment, packed.inv_mass,
                        packed.inv_mass.copy(), *segments,
-                       *(np.ones(e.size, dtype=np.uint8) for e in segments),
                        *(_every(e.size // 2 + 2) for e in segments), np.ones(5, dtype=np.int64))
 
 
 @njit(cache=True)
-def _element_ranges(segment, segment_on, on, ranges):
-    """Which elements to evaluate (``on``: an element with a DOF in an active segment, i.e. its
-    lowest segment or the next one active, or one that always moves) and the runs of them as
-    rows [start, end) of ``ranges``; returns the number of rows."""
+def _element_ranges(segment, segment_on, ranges):
+    """The runs of elements to evaluate as rows [start, end) of ``ranges`` (an element with a
+    DOF in an active segment: its lowest segment or the next one active; or one that always
+    moves); returns the number of rows."""
     n = segment_on.shape[0]
+    rows = 0
+    inside = False
     for e in range(segment.shape[0]):
         s = segment[e]
-        if s < 0 or segment_on[s] != 0 or (s + 1 < n and segment_on[s + 1] != 0):
-            on[e] = 1
-        else:
-            on[e] = 0
-    rows = 0
-    e = 0
-    n_el = segment.shape[0]
-    while e < n_el:
-        if on[e] != 0:
-            start = e
-            while e < n_el and on[e] != 0:
-                e += 1
-            ranges[rows, 0] = start
+        evaluated = s < 0 or segment_on[s] != 0 or (s + 1 < n and segment_on[s + 1] != 0)
+        if evaluated and not inside:
+            ranges[rows, 0] = e
+            inside = True
+        elif inside and not evaluated:
             ranges[rows, 1] = e
             rows += 1
-        else:
-            e += 1
+            inside = False
+    if inside:
+        ranges[rows, 1] = segment.shape[0]
+        rows += 1
     return rows
 
 
@@ -215,8 +211,8 @@ def update_window(window, x_low, x_high, vel, acc, acc_prev):
             acc[d] = 0.0
             acc_prev[d] = 0.0
     n = window.n_ranges
-    n[0] = _element_ranges(window.beam_segment, on, window.beam_on, window.beam_ranges)
-    n[1] = _element_ranges(window.link_segment, on, window.link_on, window.link_ranges)
-    n[2] = _element_ranges(window.pad_segment, on, window.pad_on, window.pad_ranges)
-    n[3] = _element_ranges(window.ballast_segment, on, window.ballast_on, window.ballast_ranges)
-    n[4] = _element_ranges(window.triple_segment, on, window.triple_on, window.triple_ranges)
+    n[0] = _element_ranges(window.beam_segment, on, window.beam_ranges)
+    n[1] = _element_ranges(window.link_segment, on, window.link_ranges)
+    n[2] = _element_ranges(window.pad_segment, on, window.pad_ranges)
+    n[3] = _element_ranges(window.ballast_segment, on, window.ballast_ranges)
+    n[4] = _element_ranges(window.triple_segment, on, window.triple_ranges)
