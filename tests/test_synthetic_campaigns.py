@@ -165,23 +165,30 @@ def test_workflow_scripts(tmp_path):
     runpy.run_path(str(scripts / "synth_inspections.py"), init_globals={"snakemake": fake})
     assert all(Path(p).is_file() for p in outputs)
     assert read_provenance(outputs[1])["config"] == config
-    clean_path, repairs_path = tmp_path / "clean.parquet", tmp_path / "clean.repairs.json"
+    # One job prepares both campaigns of the year (rules prepare_campaigns_<year>).
+    clean_paths = [str(tmp_path / f"clean_{d}.parquet") for d in dates]
+    repairs_paths = [str(tmp_path / f"clean_{d}.repairs.json") for d in dates]
+    psd_paths = [str(tmp_path / f"psd_{d}.parquet") for d in dates]
     short_sections = {"section_length_m": 250.0, "segment_length_m": 250.0}   # 0.5 km campaigns
     fake = types.SimpleNamespace(
-        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping={}, psd=short_sections,
-                                                    version="t"),
-        input=Files([outputs[1]]),
-        output=Files([], clean=str(clean_path), repairs=str(repairs_path),
-                     psd=str(tmp_path / "psd.parquet")),
+        config=config, params=types.SimpleNamespace(dates=dates, cleaning=cleaning,
+                                                    mapping={d: {} for d in dates},
+                                                    psd=short_sections, version="t"),
+        input=Files(outputs),
+        output=Files([], clean=clean_paths, repairs=repairs_paths, psd=psd_paths),
         log=[str(tmp_path / "check.log")])
-    runpy.run_path(str(scripts / "prepare_campaign.py"), init_globals={"snakemake": fake})
-    provenance = read_provenance(clean_path)
-    assert provenance["kind"] == "inspection_clean" and provenance["config"] == config
-    assert json.loads(repairs_path.read_text())["source"] == outputs[1]
-    assert "repaired samples" in (tmp_path / "check.log").read_text()
-    psd = read_provenance(tmp_path / "psd.parquet")   # the same job's PSD of the cleaned table
-    assert psd["kind"] == "psd" and psd["source"] == str(clean_path)
-    assert psd["psd"] == short_sections
+    runpy.run_path(str(scripts / "prepare_campaigns.py"), init_globals={"snakemake": fake})
+    for k in range(len(dates)):
+        provenance = read_provenance(clean_paths[k])
+        assert provenance["kind"] == "inspection_clean" and provenance["config"] == config
+        assert json.loads(Path(repairs_paths[k]).read_text())["source"] == outputs[k]
+        psd = read_provenance(psd_paths[k])   # the same job's PSD of the cleaned table
+        assert psd["kind"] == "psd" and psd["source"] == clean_paths[k]
+        assert psd["psd"] == short_sections
+    log_text = (tmp_path / "check.log").read_text()
+    assert log_text.count("repaired samples") == len(dates)
+    assert all(f"campaign {d}" in log_text for d in dates)
+    clean_path = clean_paths[1]
 
     # A file of the user's own car: read through the mapping the rule passes in params.
     own = read_table(outputs[1]).rename(columns={"chainage_m": "KM", "gauge_mm": "GAUGE"})
@@ -191,13 +198,14 @@ def test_workflow_scripts(tmp_path):
     mapping = {"columns": {"KM": "chainage_m", "GAUGE": "gauge_mm"}, "units": {"chainage": "km"}}
     mapped_path = tmp_path / "mapped.parquet"
     fake = types.SimpleNamespace(
-        config=config, params=types.SimpleNamespace(cleaning=cleaning, mapping=mapping, psd=short_sections,
-                                                    version="t"),
+        config=config, params=types.SimpleNamespace(dates=["2023-03-15"], cleaning=cleaning,
+                                                    mapping={"2023-03-15": mapping},
+                                                    psd=short_sections, version="t"),
         input=Files([str(user_file)]),
-        output=Files([], clean=str(mapped_path), repairs=str(tmp_path / "mapped.json"),
-                     psd=str(tmp_path / "mapped_psd.parquet")),
+        output=Files([], clean=[str(mapped_path)], repairs=[str(tmp_path / "mapped.json")],
+                     psd=[str(tmp_path / "mapped_psd.parquet")]),
         log=[str(tmp_path / "mapped.log")])
-    runpy.run_path(str(scripts / "prepare_campaign.py"), init_globals={"snakemake": fake})
+    runpy.run_path(str(scripts / "prepare_campaigns.py"), init_globals={"snakemake": fake})
     doc = json.loads((tmp_path / "mapped.json").read_text())
     assert doc["renamed_columns"] == {"KM": "chainage_m", "GAUGE": "gauge_mm"}
     assert doc["unit_conversions"] == {"chainage_m": {"unit": "km", "factor": 1000.0}}

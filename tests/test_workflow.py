@@ -1,8 +1,8 @@
 """End-to-end checks of the Snakemake workflow on a small study in a scratch copy of the repo.
 
 What it shows: the DAG runs from synthetic inspection data to the first figure; every table
-carries provenance; and adding one inspection campaign reruns only that campaign's jobs and what
-genuinely depends on it.
+carries provenance; and adding one inspection campaign reruns only its year's preparation job and
+what genuinely depends on it.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ inspections:
     spectrum: tbt3352
     length_km: 2.0
     campaigns: 3
-    start_date: "2024-01-15"
+    start_date: "2023-12-15"   # two calendar years: two preparation jobs
     interval_months: 1
     seed: 7
 study:
@@ -98,7 +98,7 @@ def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
                             capture_output=True, text=True).stdout
     assert status == "", f"the first run changed the checkout:\n{status}"
     psd_tables = sorted((tmp_path / "results" / "psd").glob("*.parquet"))
-    assert [p.stem for p in psd_tables] == ["2024-01-15", "2024-02-15", "2024-03-15"]
+    assert [p.stem for p in psd_tables] == ["2023-12-15", "2024-01-15", "2024-02-15"]
     provenance = read_provenance(psd_tables[0])
     assert provenance["config"]["inspections"]["synthetic"]["length_km"] == 2.0
     assert (tmp_path / "results" / "figures" / "psd_vs_standard.png").stat().st_size > 10_000
@@ -107,15 +107,18 @@ def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
     dry = _snakemake(tmp_path, "--dry-run")
     assert "Nothing to be done" in dry.stdout + dry.stderr
 
-    # A user drops in one new campaign (CSV); only its jobs and their dependents must run.
-    newest = pd.read_parquet(tmp_path / "resources/inspections/synthetic/2024-03-15.parquet")
-    newest.to_csv(tmp_path / "resources/inspections/2024-04-15.csv", index=False)
+    # A user drops in one new campaign (CSV); only its year's preparation job and their
+    # dependents must run, not the earlier year's.
+    newest = pd.read_parquet(tmp_path / "resources/inspections/synthetic/2024-02-15.parquet")
+    newest.to_csv(tmp_path / "resources/inspections/2024-03-15.csv", index=False)
     dry = _snakemake(tmp_path, "--dry-run")
     text = dry.stdout + dry.stderr
     dates = set(re.findall(r"date=(\d{4}-\d{2}-\d{2})", text))
-    assert dates == {"2024-04-15"}, text[-3000:]
+    assert dates <= {"2024-03-15"}, text[-3000:]
     stats = dict(re.findall(r"^(\w+)\s+(\d+)$", text, flags=re.M))
-    assert stats.get("prepare_campaign") == "1", stats
+    assert stats.get("prepare_campaigns_2024") == "1", stats
+    assert "prepare_campaigns_2023" not in stats, stats
+    assert "results/psd/2024-03-15.parquet" in text
     assert "synth_inspections" not in stats
 
     # The real run runs exactly the jobs the dry run listed (no checkpoint hides any), and none
@@ -126,10 +129,10 @@ def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
     batches = [w for rule, w in planned if rule in ("simulate_batch", "study_design")]
     assert batches and all("scenario=2024-" in w or "scenario=2025-" in w for w in batches), batches
     assert not any("scenario=single" in w or "scenario=C1" in w for w in batches)
-    assert any("scenario=2024-04-15" in w for w in batches)   # the new latest campaign's sets
+    assert any("scenario=2024-03-15" in w for w in batches)   # the new latest campaign's sets
 
     # Re-copying an unchanged file (new mtime, same content) does not trigger reruns.
-    src = tmp_path / "resources/inspections/2024-04-15.csv"
+    src = tmp_path / "resources/inspections/2024-03-15.csv"
     data = src.read_bytes()
     src.unlink()
     src.write_bytes(data)
@@ -168,5 +171,5 @@ def test_unusable_campaign_files_stop_the_workflow_at_parse_time(tmp_path):
     for path in data:
         shutil.copy(path, folder / path.name)
     dry = _snakemake(tmp_path, "--dry-run")
-    dates = set(re.findall(r"date=(\d{4}-\d{2}-\d{2})", dry.stdout + dry.stderr))
+    dates = set(re.findall(r"psd/(\d{4}-\d{2}-\d{2})\.parquet", dry.stdout + dry.stderr))
     assert {"2024-04-14", "2024-05-15"} <= dates

@@ -3,10 +3,10 @@
 Every script in ``workflow/scripts`` starts with::
 
     from ttbpipe.workflow import snakemake_context
-    snakemake = snakemake_context(globals(), "prepare_campaign", date="2023-01-15")
+    snakemake = snakemake_context(globals(), "study_design", scenario="C1")
 
 Under Snakemake this returns the ``snakemake`` object Snakemake injected. Run directly
-(``python workflow/scripts/prepare_campaign.py [key=value ...]`` from the repository root), it parses
+(``python workflow/scripts/study_design.py [key=value ...]`` from the repository root), it parses
 the Snakefile with the default configuration and builds the same object for the named rule, with
 the wildcards given as defaults or as ``key=value`` arguments on the command line; a
 ``--configfile=PATH`` argument selects another study configuration.

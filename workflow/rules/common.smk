@@ -135,6 +135,19 @@ def discover_campaigns() -> dict[str, str]:
 CAMPAIGNS = discover_campaigns()
 
 
+def campaigns_by_year() -> dict[str, list[str]]:
+    """Campaign dates per calendar year: one preparation job each (rules
+    prepare_campaigns_<year>), so that a job's start-up is paid once per year and a new or changed
+    campaign reruns only its own year (docs/performance.md)."""
+    years: dict[str, list[str]] = {}
+    for date in CAMPAIGNS:   # sorted by date
+        years.setdefault(date[:4], []).append(date)
+    return years
+
+
+CAMPAIGN_YEARS = campaigns_by_year()
+
+
 def campaign_file(wildcards) -> str:
     return CAMPAIGNS[wildcards.date]
 
