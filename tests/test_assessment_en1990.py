@@ -10,6 +10,10 @@
   Euler-Bernoulli frequencies j^2 pi/(2 L^2) sqrt(EI/m), j = 1, 3 (Blevins, Formulas for Natural
   Frequency and Mode Shape, 1979, table 8-1), for spans of 32 and 24 m; tolerance 0.1 % (as
   tests/test_structure_modal.py, 32 elements per span).
+* The study's once-per-study span-frequency record (rule study_span_frequencies): through its
+  JSON file, the options it gives the batches are the analysis's numbers exactly, and a deck
+  assessment with them equals the one that analyses the structure itself (DataFrame.equals); a
+  record of another structure is refused.
 * deck_check_monitors: valid monitor specs (they compile), pairs 3 m apart, one per span start,
   middle and end and per joint.
 """
@@ -21,7 +25,9 @@ from assessment_synthetic import synthetic_run
 from test_assessment_processing import lowpass_power
 from ttbpipe.assessment import assess
 from ttbpipe.assessment.en1990 import band_cutoff_hz, twist_limit_m
-from ttbpipe.assessment.modal import span_frequencies
+from ttbpipe.assessment.modal import span_frequencies, span_frequency_record, span_options
+from ttbpipe.assessment.study import (needs_span_frequencies, resolve_assessment,
+                                      with_span_frequencies)
 from ttbpipe.assessment.monitors import deck_check_monitors, twist_sections
 from ttbpipe.structure import build_structure
 from ttbpipe.structure.monitors import compile_monitors, default_monitors
@@ -102,6 +108,45 @@ def test_span_frequencies_of_pinned_girders_are_euler_bernoulli():
         assert s.f0_hz == pytest.approx(bending(1, s.length_m), rel=1e-3)
         assert s.f3_hz == pytest.approx(bending(3, s.length_m), rel=1e-3)
     assert span_frequencies(structure) is spans                 # cached per structure
+
+
+def test_span_frequency_record_gives_the_analysis_numbers(tmp_path):
+    import json
+
+    structure = {"layout": {"approach_length_m": 0.0, "spans_m": [32.0, 24.0],
+                            "bridge_track": "none"}, "bearing": {"rigid": True}}
+    path = tmp_path / "span_frequencies.json"
+    path.write_text(json.dumps(span_frequency_record(structure), indent=1))
+    record = json.loads(path.read_text())
+    spans = span_frequencies(structure)
+    assert span_options(record, structure) == {"f0_hz": [s.f0_hz for s in spans],
+                                               "f3_hz": [s.f3_hz for s in spans],
+                                               "span_lengths_m": [32.0, 24.0]}
+    other = {**structure, "layout": {**structure["layout"], "spans_m": [32.0, 32.0]}}
+    with pytest.raises(ValueError, match="another structure"):
+        span_options(record, other, str(path))
+
+    assessment = resolve_assessment({"standard": ["en1990"],
+                                     "options": {"en1990": {"twist": False}}})
+    assert needs_span_frequencies(assessment)
+    given = with_span_frequencies(assessment, record, structure, str(path))
+    assert not needs_span_frequencies(given)
+    t = 1e-3 * np.arange(4000)
+    table, summary = synthetic_run({
+        "girder_span1_mid_z_acc_m_s2": np.sin(2 * np.pi * 35.0 * t) + 0.3 * np.sin(2 * np.pi * 8 * t),
+        "girder_span2_mid_z_acc_m_s2": 0.5 * np.sin(2 * np.pi * 45.0 * t),
+        "girder_span1_mid_z_disp_mm": -1.2 * np.sin(np.pi * t / 4.0) ** 2,
+        "girder_span2_mid_z_disp_mm": -0.8 * np.sin(np.pi * t / 4.0) ** 2})
+    analysed = assess(table, summary, "en1990", options=assessment["options"]["en1990"],
+                      config={"structure": structure})
+    from_record = assess(table, summary, "en1990", options=given["options"]["en1990"],
+                         config={"structure": structure})
+    assert analysed.equals(from_record)
+    # options given by the user, or EN 1990 not selected: nothing to take from the record
+    fixed = resolve_assessment({"standard": ["en1990"], "options": {"en1990": {
+        "f0_hz": 5.0, "f3_hz": 40.0, "span_lengths_m": 32.0, "twist": False}}})
+    assert with_span_frequencies(fixed, record, other, str(path)) == fixed
+    assert not needs_span_frequencies(resolve_assessment({"standard": ["en14363"]}))
 
 
 def test_deck_check_monitors_compile_and_pair_sections_3_m_apart():

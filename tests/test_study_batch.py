@@ -277,7 +277,9 @@ def test_a_batch_carries_the_assessment_of_each_sample_as_ttbpipe_assess_gives_i
     monitors) gives the same processed values and utilisations as the profiles applied to the
     same run by ttbpipe.assessment.assess (second path: the run repeated with run_coupled and
     assessed from its table; exact equality, the runs are deterministic), and the batch's
-    provenance carries each row's clause and category for the report."""
+    provenance carries each row's clause and category for the report. The same batch given the
+    study's EN 1990 span-frequency record (rule study_span_frequencies) instead of analysing the
+    structure itself writes the same extremes (DataFrame.equals)."""
     from ttbpipe.assessment import assess
     from ttbpipe.assessment.columns import utilisation_column, value_column
     from ttbpipe.assessment.study import resolve_assessment, run_case
@@ -295,6 +297,18 @@ def test_a_batch_carries_the_assessment_of_each_sample_as_ttbpipe_assess_gives_i
     assert {(m["profile"], m["index"]) for m in meta} >= {
         ("gb5599", "wheel_unloading_ratio"), ("en1990", "deck_twist_m")}
     assert not any(c.startswith(("en14363_", "en12299_")) for c in extremes.columns)
+
+    import json
+
+    from ttbpipe.assessment.modal import span_frequency_record
+    from ttbpipe.study.batch import simulate_batch
+    from ttbpipe.study.design import batch_rows
+
+    record = tmp_path / "span_frequencies.json"
+    record.write_text(json.dumps(span_frequency_record(config["structure"])))
+    second = batch_paths(str(tmp_path / "with_record"), "C2", 0, 0)
+    simulate_batch(batch_rows(design, "C2", 0, 0), config, {}, *second, span_frequencies=record)
+    assert pd.read_parquet(second[0]).equals(extremes)
 
     # the same sample outside the study: its case, the field factors, run_coupled, assess
     sim = study_samples.resolve_simulation(config["simulation"])

@@ -94,6 +94,7 @@ localrules:
     sample_fields,
     plot_psd_vs_standard,
     tipm_figures,
+    study_span_frequencies,
 
 
 def synthetic_dates() -> list[str]:

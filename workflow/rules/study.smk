@@ -13,6 +13,8 @@
 
 from snakemake.logging import logger as _smk_logger
 
+from ttbpipe.assessment.study import needs_span_frequencies as _study_needs_span_frequencies
+from ttbpipe.assessment.study import resolve_assessment as _study_resolve_assessment
 from ttbpipe.inspection.format import InspectionError as _InspectionError
 from ttbpipe.study.batch import batch_paths as _study_batch_paths
 from ttbpipe.study.design import resolve_scenarios as _study_resolve_scenarios
@@ -38,7 +40,7 @@ STUDY_KIND = {label: kind for kind, labels in STUDY_LABELS.items() for label in 
 def _campaign_sections(date: str) -> int:
     synthetic = config["inspections"].get("synthetic", {}) if date in synthetic_dates() else None
     return _study_plan.campaign_sections(CAMPAIGNS[date], config["psd"]["section_length_m"],
-                                         synthetic, inspection_mapping(type("W", (), {"date": date})))
+                                         synthetic, inspection_mapping(date))
 
 
 try:
@@ -116,8 +118,29 @@ rule study_design:
         "../scripts/study_design.py"
 
 
+# EN 1990 A2's span frequencies of the study's nominal structure, analysed once per study when a
+# batch would need them (the profile selected without f0/f3/span lengths as options).
+STUDY_NEEDS_SPANS = bool(STUDY_BATCHES) and _study_needs_span_frequencies(
+    _study_resolve_assessment(config.get("assessment")))
+
+
+rule study_span_frequencies:
+    """f0 and f3 of every span of the study's structure (EN 1990 A2 band rule), once per study:
+    each batch job would otherwise repeat the modal analysis (about 1.1 s)."""
+    output:
+        results_path("study/span_frequencies.json"),
+    params:
+        structure=config["structure"],
+        version=MODEL_VERSION,
+    log:
+        log_path("study/span_frequencies.log"),
+    script:
+        "../scripts/span_frequencies.py"
+
+
 def study_batch_inputs(wildcards) -> dict[str, str]:
-    """The scenario's design and the irregularity profiles the batch reads."""
+    """The scenario's design, the irregularity profiles the batch reads and the span
+    frequencies."""
     kind = _study_kind(wildcards.scenario)
     if wildcards.digest != STUDY_DIGEST[wildcards.scenario]:
         raise WorkflowError(
@@ -126,6 +149,8 @@ def study_batch_inputs(wildcards) -> dict[str, str]:
             "that folder holds results of other settings or code; ask for the current targets "
             "(snakemake --cores N) instead of an old batch file")
     inputs = {"design": results_path(f"study/design/{wildcards.scenario}.parquet")}
+    if STUDY_NEEDS_SPANS:
+        inputs["span_frequencies"] = results_path("study/span_frequencies.json")
     if kind == "irregularity":
         inputs["profiles"] = f"{RESULTS}/tipm/profiles/{TIPM_LAST}.parquet"
     elif kind == "forecast":

@@ -36,9 +36,11 @@ def main(snakemake) -> None:
         mc = dict(settings.get("mc_profiles") or {})
         profiles = {"irregularity_mc": {**mc, "psd_paths": paths,
                                         "date": max(Path(p).stem for p in paths)}}
+    spans = (snakemake.input.span_frequencies if "span_frequencies" in snakemake.input.keys()
+             else None)   # the study's EN 1990 span frequencies, analysed once per study
     simulate_batch(rows, config, profiles, snakemake.output.extremes, snakemake.output.histories,
-                   scenario=w.scenario, first=int(w.first), last=int(w.last),
-                   settings=settings, settings_digest=w.digest)
+                   span_frequencies=spans, scenario=w.scenario, first=int(w.first),
+                   last=int(w.last), settings=settings, settings_digest=w.digest)
 
 
 # Dask's LocalCluster starts its workers with multiprocessing "spawn", which re-imports this

@@ -58,9 +58,35 @@ class SpanFrequencies:
 def span_frequencies(structure_config: Mapping[str, Any] | None,
                      properties: Mapping[str, Any] | None = None) -> tuple[SpanFrequencies, ...]:
     """f0 and f3 of every span of the structure of a case (cached per structure)."""
-    key = json.dumps(jsonable({"structure": structure_config or {}, "properties": properties}),
-                     sort_keys=True)
-    return _span_frequencies(key)
+    return _span_frequencies(_structure_key(structure_config, properties))
+
+
+def _structure_key(structure_config: Mapping[str, Any] | None,
+                   properties: Mapping[str, Any] | None = None) -> str:
+    return json.dumps(jsonable({"structure": structure_config or {}, "properties": properties}),
+                      sort_keys=True)
+
+
+def span_frequency_record(structure_config: Mapping[str, Any] | None) -> dict[str, Any]:
+    """f0 and f3 of every span of a nominal structure as a JSON-able record, with the structure
+    it belongs to. A study computes it once (rule study_span_frequencies) and its batches take
+    the spans from it (:func:`span_options`) instead of each process repeating the analysis."""
+    return {"structure_key": _structure_key(structure_config),
+            "spans": [dataclasses.asdict(s) for s in span_frequencies(structure_config)]}
+
+
+def span_options(record: Mapping[str, Any], structure_config: Mapping[str, Any] | None,
+                 source: str = "the span-frequency record") -> dict[str, list[float]]:
+    """The EN 1990 profile's options ``f0_hz``, ``f3_hz``, ``span_lengths_m`` from a record of
+    :func:`span_frequency_record`; the same numbers as the analysis of ``structure_config``
+    (JSON keeps every float exactly). A record made for another structure is an error."""
+    if record.get("structure_key") != _structure_key(structure_config):
+        raise ValueError(f"{source} was computed for another structure than the study's "
+                         "(structure: section changed since): rerun the workflow, which "
+                         "recomputes it (rule study_span_frequencies)")
+    spans = [SpanFrequencies(**s) for s in record["spans"]]
+    return {"f0_hz": [s.f0_hz for s in spans], "f3_hz": [s.f3_hz for s in spans],
+            "span_lengths_m": [s.length_m for s in spans]}
 
 
 @lru_cache(maxsize=8)

@@ -50,6 +50,29 @@ def resolve_assessment(section: Mapping[str, Any] | None) -> dict[str, Any]:
     return {"standard": names, "options": resolved}
 
 
+def needs_span_frequencies(assessment: Mapping[str, Any]) -> bool:
+    """Whether the EN 1990 profile is selected and takes f0, f3 and the span lengths from the
+    modal analysis (none of them given as options)."""
+    if "en1990" not in assessment["standard"]:
+        return False
+    options = assessment["options"]["en1990"]
+    return any(options[k] is None for k in ("f0_hz", "f3_hz", "span_lengths_m"))
+
+
+def with_span_frequencies(assessment: Mapping[str, Any], record: Mapping[str, Any],
+                          structure: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """``assessment`` (resolved) with the EN 1990 spans of the study's span-frequency record
+    (:func:`.modal.span_frequency_record`) as options: the numbers the modal analysis would
+    give, without each batch process repeating it (1.1 s). Unchanged when not needed."""
+    if not needs_span_frequencies(assessment):
+        return dict(assessment)
+    from .modal import span_options
+
+    options = {**assessment["options"], "en1990": {**assessment["options"]["en1990"],
+                                                   **span_options(record, structure, source)}}
+    return {**assessment, "options": options}
+
+
 def needs_twist_monitors(assessment: Mapping[str, Any]) -> bool:
     return "en1990" in assessment["standard"] and bool(assessment["options"]["en1990"]["twist"])
 

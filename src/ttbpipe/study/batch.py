@@ -20,6 +20,7 @@ Executors (``simulation.executor``):
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import time
@@ -30,7 +31,7 @@ import pandas as pd
 
 from ..io import write_table
 from ..threads import WORKER_ENV
-from ..assessment.study import resolve_assessment
+from ..assessment.study import resolve_assessment, with_span_frequencies
 from .samples import ASSESSMENT_ROWS_KEY, resolve_simulation, run_sample
 
 log = logging.getLogger(__name__)
@@ -56,15 +57,20 @@ class Progress:
         return line
 
 
-def _sample_kwargs(config: Mapping[str, Any], profiles: Mapping[str, str]) -> dict[str, Any]:
+def _sample_kwargs(config: Mapping[str, Any], profiles: Mapping[str, str],
+                   span_frequencies: str | os.PathLike[str] | None = None) -> dict[str, Any]:
     if "structure" not in config:
         raise ValueError("configuration has no structure: section (the study's bridge); copy the "
                          "one in config/config.yaml")
+    assessment = resolve_assessment(config.get("assessment"))
+    if span_frequencies is not None:
+        record = json.loads(Path(span_frequencies).read_text())
+        assessment = with_span_frequencies(assessment, record, config["structure"],
+                                           str(span_frequencies))
     return {"study_seed": int(config["study"]["seed"]),
             "sim": resolve_simulation(config.get("simulation")),
             "structure": dict(config["structure"]), "fields": config.get("fields"),
-            "profiles": dict(profiles),
-            "assessment": resolve_assessment(config.get("assessment"))}
+            "profiles": dict(profiles), "assessment": assessment}
 
 
 def _run_local(rows: pd.DataFrame, kwargs: Mapping[str, Any], progress: Progress,
@@ -131,14 +137,18 @@ def _run_dask(rows: pd.DataFrame, kwargs: Mapping[str, Any], progress: Progress,
 
 def run_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapping[str, str], *,
               label: str = "", executor: str | None = None,
-              runner: Callable = run_sample, metadata: list | None = None
+              runner: Callable = run_sample, metadata: list | None = None,
+              span_frequencies: str | os.PathLike[str] | None = None
               ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Simulate the design rows of one batch; (extremes, histories) in sample-index order.
     ``metadata``: a list that receives the assessed rows' metadata of the batch (clause,
-    category, limit source per profile index; the same for every sample)."""
+    category, limit source per profile index; the same for every sample).
+    ``span_frequencies``: the study's EN 1990 span-frequency record (JSON of
+    :func:`ttbpipe.assessment.modal.span_frequency_record`), so that the batch does not repeat
+    the modal analysis; None: the batch's process analyses the structure itself (same numbers)."""
     sim = resolve_simulation(config.get("simulation"))
     executor = executor or sim["executor"]
-    kwargs = _sample_kwargs(config, profiles)
+    kwargs = _sample_kwargs(config, profiles, span_frequencies)
     rows = rows.sort_values(["scenario", "sample_index"]).reset_index(drop=True)
     progress = Progress(label or f"{rows['scenario'].iloc[0]} "
                         f"{rows['sample_index'].iloc[0]}-{rows['sample_index'].iloc[-1]}", len(rows))
@@ -163,13 +173,14 @@ def run_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapping[s
 def simulate_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapping[str, str],
                    extremes_path: str | os.PathLike[str], histories_path: str | os.PathLike[str],
                    *, executor: str | None = None, runner: Callable = run_sample,
+                   span_frequencies: str | os.PathLike[str] | None = None,
                    **provenance: Any) -> tuple[Path, Path]:
     """Run a batch and write its two tables atomically (nothing is written if a sample fails)."""
     from ..stats.schema import validate_extremes, validate_histories
 
     assessed: list = []
     extremes, histories = run_batch(rows, config, profiles, executor=executor, runner=runner,
-                                    metadata=assessed)
+                                    metadata=assessed, span_frequencies=span_frequencies)
     validate_extremes(extremes, extremes_path)
     validate_histories(histories, histories_path)
     meta = dict(config=config, samples=[int(i) for i in rows["sample_index"]],
