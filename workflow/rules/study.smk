@@ -130,7 +130,7 @@ rule study_span_frequencies:
     output:
         results_path("study/span_frequencies.json"),
     params:
-        structure=config["structure"],
+        structure=config.get("structure") or {},
         version=MODEL_VERSION,
     log:
         log_path("study/span_frequencies.log"),

@@ -4,10 +4,10 @@
                 [--window hann] [--detrend linear] [--band-m 2 200] [--config config.yaml]
                 [--input-kind auto|clean|raw] --out PSD.parquet
 
-FILE is a cleaned campaign Parquet (written by ``check-inspection`` / the ``prepare_campaigns_<year>``
-rules) or a raw campaign CSV/Parquet, which is read and cleaned first with
-:func:`ttbpipe.inspection.check_campaign` (cleaning options and the column/unit mapping from the
-``inspections`` section of ``--config``, else the package defaults).
+FILE is a cleaned campaign Parquet (written by ``check-inspection`` / the
+``prepare_campaigns_<year>`` rules) or a raw campaign CSV/Parquet, which is read and cleaned first
+with :func:`ttbpipe.inspection.check_campaign` (cleaning options and the column/unit mapping from
+the ``inspections`` section of ``--config``, else the package defaults).
 ``--input-kind auto`` treats CSV files as raw and Parquet files as cleaned when their ttbpipe
 provenance ``kind`` contains "clean", raw otherwise.
 
