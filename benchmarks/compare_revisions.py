@@ -39,6 +39,47 @@ def run(script: Path, src: Path, cwd: Path, extra: list[str]) -> dict[str, tuple
     return {name: (value, unit) for name, value, unit in parse_figures(proc.stdout)}
 
 
+def export_revision(rev: str, dest: Path) -> str:
+    """``git archive`` of ``rev`` unpacked into ``dest``; returns the short hash."""
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev],
+                             check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
+    return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", rev],
+                          capture_output=True, text=True, check=True).stdout.strip()
+
+
+def alternate(script: Path, old: Path, rounds: int, extra: list[str],
+              progress=None) -> dict[str, list[dict]]:
+    """The script's figures on the exported tree ``old`` and on this tree, ``rounds`` times
+    each, old/new and new/old alternately, after one warm-up run each (numba compiles into each
+    tree's own cache)."""
+    trees = {"old": (old / "src", old), "new": (ROOT / "src", ROOT)}
+    for name, (src, cwd) in trees.items():
+        run(script, src, cwd, extra)
+    results: dict[str, list[dict]] = {"old": [], "new": []}
+    for i in range(rounds):
+        for name in (("old", "new") if i % 2 == 0 else ("new", "old")):
+            results[name].append(run(script, *trees[name], extra))
+            if progress:
+                progress(f"{script.name} round {i + 1}/{rounds} {name}")
+    return results
+
+
+def side_by_side(results: dict[str, list[dict]]) -> list[tuple]:
+    """(figure, old median, new median, ratio, old min, new min, ratio, unit) of every figure
+    both sides printed."""
+    rows = []
+    for name in results["new"][0]:
+        if name not in results["old"][0]:
+            continue
+        o = [r[name][0] for r in results["old"]]
+        n = [r[name][0] for r in results["new"]]
+        om, nm = statistics.median(o), statistics.median(n)
+        rows.append((name, om, nm, nm / om if om else float("nan"), min(o), min(n),
+                     min(n) / min(o) if min(o) else float("nan"), results["new"][0][name][1]))
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rev", default="HEAD", help="git revision to compare with")
@@ -49,33 +90,15 @@ def main() -> None:
     args = parser.parse_args()
     script = Path(args.script).resolve()
     with tempfile.TemporaryDirectory(prefix="ttbpipe_rev_") as tmp:
-        old = Path(tmp)
-        archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.rev],
-                                 check=True, capture_output=True).stdout
-        subprocess.run(["tar", "-x", "-C", str(old)], input=archive, check=True)
-        trees = {"old": (old / "src", old), "new": (ROOT / "src", ROOT)}
-        for name, (src, cwd) in trees.items():   # warm-up: compile into each tree's cache
-            run(script, src, cwd, args.extra)
-        results: dict[str, list[dict]] = {"old": [], "new": []}
-        for i in range(args.rounds):
-            order = ("old", "new") if i % 2 == 0 else ("new", "old")
-            for name in order:
-                results[name].append(run(script, *trees[name], args.extra))
-    rev = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", args.rev],
-                         capture_output=True, text=True).stdout.strip()
+        rev = export_revision(args.rev, Path(tmp))
+        results = alternate(script, Path(tmp), args.rounds, args.extra)
     print(f"{script.name}: revision {rev} (old) vs working tree (new), {args.rounds} rounds, "
           f"load average now {os.getloadavg()[0]:.1f}")
     print(f"{'figure':44s} {'old median':>10s} {'new median':>10s} {'ratio':>6s} "
           f"{'old min':>10s} {'new min':>10s} {'ratio':>6s}  unit")
-    for name in results["new"][0]:
-        if name not in results["old"][0]:
-            continue
-        o = [r[name][0] for r in results["old"]]
-        n = [r[name][0] for r in results["new"]]
-        om, nm = statistics.median(o), statistics.median(n)
-        print(f"{name:44s} {om:10.4g} {nm:10.4g} {nm / om if om else float('nan'):6.3f} "
-              f"{min(o):10.4g} {min(n):10.4g} {min(n) / min(o) if min(o) else float('nan'):6.3f}"
-              f"  {results['new'][0][name][1]}")
+    for name, om, nm, ratio, omin, nmin, ratio_min, unit in side_by_side(results):
+        print(f"{name:44s} {om:10.4g} {nm:10.4g} {ratio:6.3f} {omin:10.4g} {nmin:10.4g} "
+              f"{ratio_min:6.3f}  {unit}")
     if args.figure in results["new"][0]:
         print(f"{args.figure} per round, old: "
               + ", ".join(f"{r[args.figure][0]:.4g}" for r in results["old"]))

@@ -1,6 +1,7 @@
 """Run every ``benchmarks/bench_*.py`` script repeatedly and write ``benchmarks/results.md``.
 
     python benchmarks/run_all.py [--repeat 3] [--only reference_case tipm] [--out benchmarks/results.md]
+        [--baseline REV | --no-baseline]
 
 Each script runs in a subprocess pinned to one thread (NUMBA_NUM_THREADS=1,
 OPENBLAS_NUM_THREADS=1, OMP_NUM_THREADS=1, MKL_NUM_THREADS=1) ``--repeat`` times. Convention:
@@ -10,6 +11,12 @@ a Markdown table (figure, median, unit, runs, min-max) with the machine describe
 /proc/cpuinfo, cores, memory, Python/numpy/numba versions, load average at the start and end).
 A script that fails is reported in the table's notes with its exit code and the last line of its
 error output; the others still run. Timings only: nothing is asserted (docs/dev/contributing.md).
+
+Side by side with a baseline: the scripts of :data:`BASELINE_SCRIPTS` (the reference case and a
+study of a few hundred samples through Snakemake) also run on the pinned revision
+:data:`BASELINE_REVISION` (``git archive`` into a scratch folder, its package first on
+``PYTHONPATH``; ``compare_revisions.py``), old and new alternating in the same run, ``--repeat``
+rounds each after one warm-up; the table gives both medians and their ratio new/old.
 """
 
 from __future__ import annotations
@@ -29,6 +36,11 @@ HERE = Path(__file__).resolve().parent
 FIGURE_RE = re.compile(r"^FIGURE\s+(?P<name>\S+)\s*=\s*(?P<value>[-+0-9.eEinfa]+)\s*(?P<unit>.*)$")
 THREAD_ENV = {"NUMBA_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
               "MKL_NUM_THREADS": "1"}
+#: The code the speed targets (docs/performance.md) are measured against: main on 2026-12-01
+#: before the history decimator, when the targets were set.
+BASELINE_REVISION = "8caed1b"
+#: Scripts also timed on the baseline revision, side by side.
+BASELINE_SCRIPTS = ("bench_reference_case.py", "bench_study_workflow.py")
 
 
 def parse_figures(text: str) -> list[tuple[str, float, str]]:
@@ -86,6 +98,20 @@ def run_script(path: Path, timeout: float) -> tuple[int, str, str, float]:
     return code, out, err, time.perf_counter() - t0
 
 
+def _side_by_side(script: Path, revision: str, rounds: int) -> tuple[str, dict]:
+    """(short hash, {"old": [figures per round], "new": [...]}) of ``script`` on ``revision``
+    and on this tree, alternating (compare_revisions.py)."""
+    import tempfile
+
+    from compare_revisions import alternate, export_revision
+
+    with tempfile.TemporaryDirectory(prefix="ttbpipe_baseline_") as tmp:
+        short = export_revision(revision, Path(tmp))
+        results = alternate(script, Path(tmp), rounds, [],
+                            progress=lambda text: print(f"{text} (baseline {short})", flush=True))
+    return short, results
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3, help="runs per script (median reported)")
@@ -93,6 +119,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="script names without bench_ and .py (default: every bench_*.py)")
     parser.add_argument("--out", type=Path, default=HERE / "results.md")
     parser.add_argument("--timeout", type=float, default=1800.0, help="per run, seconds")
+    parser.add_argument("--baseline", default=BASELINE_REVISION,
+                        help="git revision timed side by side with this tree (BASELINE_SCRIPTS)")
+    parser.add_argument("--no-baseline", action="store_true", help="no side-by-side timing")
     args = parser.parse_args(argv)
     if args.repeat < 1:
         parser.error("--repeat must be >= 1")
@@ -108,9 +137,28 @@ def main(argv: list[str] | None = None) -> int:
     started = _dt.datetime.now(_dt.timezone.utc)
     rows: list[tuple[str, str, list[float], str]] = []
     notes: list[str] = []
+    compared: list[tuple[str, list[tuple]]] = []
+    baseline = ""
     for script in scripts:
         values: dict[str, list[float]] = {}
         units: dict[str, str] = {}
+        if script.name in BASELINE_SCRIPTS and not args.no_baseline:
+            try:
+                baseline, results = _side_by_side(script, args.baseline, args.repeat)
+            except (SystemExit, subprocess.CalledProcessError) as exc:
+                last = (str(exc).strip().splitlines() or ["(no message)"])[-1]
+                notes.append(f"{script.name} against {args.baseline}: {last}")
+                continue
+            from compare_revisions import side_by_side
+
+            compared.append((script.name, side_by_side(results)))
+            for figures in results["new"]:
+                for name, (value, unit) in figures.items():
+                    values.setdefault(name, []).append(value)
+                    units[name] = unit
+            for name, vals in values.items():
+                rows.append((script.name, name, vals, units[name]))
+            continue
         for run in range(args.repeat):
             code, out, err, wall = run_script(script, args.timeout)
             print(f"{script.name} run {run + 1}/{args.repeat}: exit {code}, {wall:.1f} s",
@@ -152,6 +200,16 @@ def main(argv: list[str] | None = None) -> int:
     for script, name, vals, unit in rows:
         lines.append(f"| {script} | {name} | {statistics.median(vals):.4g} | {unit} | {len(vals)} "
                      f"| {min(vals):.4g} - {max(vals):.4g} |")
+    if compared:
+        lines += ["", f"## Side by side with {baseline} (the baseline)", "",
+                  f"Old ({baseline}) and new (this tree) alternating in this run, {args.repeat} "
+                  "round(s) each after a warm-up; ratio new / old (below 1: faster).", "",
+                  "| script | figure | old median | new median | ratio | old min | new min | unit |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for script_name, table in compared:
+            for name, om, nm, ratio, omin, nmin, _, unit in table:
+                lines.append(f"| {script_name} | {name} | {om:.4g} | {nm:.4g} | {ratio:.3f} | "
+                             f"{omin:.4g} | {nmin:.4g} | {unit} |")
     if notes:
         lines += ["", "## Notes", ""] + [f"- {n}" for n in notes]
     text = "\n".join(lines) + "\n"
