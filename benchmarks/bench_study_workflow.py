@@ -33,7 +33,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from study_job_times import jobs_of  # noqa: E402
+from study_job_times import coupled_run_seconds, jobs_of  # noqa: E402
 
 # Generated or bulky: not part of the workflow a study needs.
 SKIP = shutil.ignore_patterns("results", "logs", ".snakemake", ".git", "__pycache__",
@@ -95,8 +95,7 @@ def main() -> None:
         for job in jobs:
             path = work / job["log"] if job["log"] else None
             if job["rule"] == "simulate_batch" and path and path.is_file():
-                runs += sum(float(t) for t in re.findall(r"coupled run done: ([\d.]+) s wall",
-                                                         path.read_text()))
+                runs += coupled_run_seconds(path.read_text())
     print(f"study of {args.samples} samples ({args.batch_size} per batch) on {args.cores} cores in "
           f"{tree}: wall {wall:.1f} s, CPU {cpu:.1f} s, {len(jobs)} Snakemake jobs, coupled runs "
           f"{runs:.1f} s")

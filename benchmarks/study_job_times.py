@@ -41,6 +41,11 @@ def jobs_of(log_text: str) -> list[dict]:
     return [{**job, "end": ended[j]} for j, job in started.items() if j in ended]
 
 
+def coupled_run_seconds(batch_log_text: str) -> float:
+    """Sum of the coupled runs' own wall times a batch log reports ("coupled run done: X s")."""
+    return sum(float(t) for t in re.findall(r"coupled run done: ([\d.]+) s wall", batch_log_text))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("log", type=Path)
@@ -68,7 +73,7 @@ def main() -> None:
         text = path.read_text()
         stamps = [datetime.datetime.strptime(m.group(1), "%Y-%m-%d %H:%M:%S,%f")
                   for line in text.splitlines() if (m := _LOG_LINE.match(line))]
-        runs += sum(float(t) for t in re.findall(r"coupled run done: ([\d.]+) s wall", text))
+        runs += coupled_run_seconds(text)
         if stamps:
             logged = (stamps[-1] - stamps[0]).total_seconds()
             inside += logged
