@@ -28,6 +28,7 @@ rule subset_simulation:
     """Subset simulation of one limit of the coupled model (rare exceedance probability)."""
     input:
         population=subset_inputs,
+        kernels=ancient(results_path("study/kernels.json")),   # compiled once (study.smk)
     output:
         results_path("study/subset/{limit}.parquet"),
         results_path("study/subset/{limit}.levels.csv"),

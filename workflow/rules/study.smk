@@ -138,9 +138,24 @@ rule study_span_frequencies:
         "../scripts/span_frequencies.py"
 
 
+rule study_kernels:
+    """Compiles the coupled model's numba kernels into numba's cache once, by a short run of the
+    study's nominal case, before any batch starts (ttbpipe.study.kernels): on a fresh checkout
+    every batch job would otherwise compile them itself, about 40 s each, the first ones at the
+    same time. Its record is an ``ancient`` input of the batches: rerunning it reruns none."""
+    output:
+        results_path("study/kernels.json"),
+    params:
+        version=MODEL_VERSION,
+    log:
+        log_path("study/kernels.log"),
+    script:
+        "../scripts/study_kernels.py"
+
+
 def study_batch_inputs(wildcards) -> dict[str, str]:
-    """The scenario's design, the irregularity profiles the batch reads and the span
-    frequencies."""
+    """The scenario's design, the irregularity profiles the batch reads, the span frequencies
+    and the compiled kernels' record (``ancient``: its time stamp reruns nothing)."""
     kind = _study_kind(wildcards.scenario)
     if wildcards.digest != STUDY_DIGEST[wildcards.scenario]:
         raise WorkflowError(
@@ -148,7 +163,8 @@ def study_batch_inputs(wildcards) -> dict[str, str]:
             f"{wildcards.digest} is not the current one ({STUDY_DIGEST[wildcards.scenario]}): "
             "that folder holds results of other settings or code; ask for the current targets "
             "(snakemake --cores N) instead of an old batch file")
-    inputs = {"design": results_path(f"study/design/{wildcards.scenario}.parquet")}
+    inputs = {"design": results_path(f"study/design/{wildcards.scenario}.parquet"),
+              "kernels": ancient(results_path("study/kernels.json"))}
     if STUDY_NEEDS_SPANS:
         inputs["span_frequencies"] = results_path("study/span_frequencies.json")
     if kind == "irregularity":
