@@ -11,6 +11,7 @@ What is checked and against what:
   compiled and counted). Both processes use their own, initially empty, ``NUMBA_CACHE_DIR``.
 """
 
+import copy
 import json
 import os
 import subprocess
@@ -20,28 +21,17 @@ from pathlib import Path
 import pytest
 import yaml
 
+from test_study_batch import CONFIG as BATCH_CONFIG
 from ttbpipe.study import kernels as study_kernels
 from ttbpipe.study import samples as study_samples
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# A tiny fields study (one trailer car, one 32 m span), as tests/test_study_batch.py.
-TINY = {
-    "study": {"name": "tiny", "seed": 5,
-              "scenarios": {"irregularity": {"enabled": False}, "forecast": {"enabled": False},
-                            "fields": {"conditions": ["C2"], "samples": 1}}},
-    "structure": {"layout": {"approach_length_m": 30.0, "spans_m": [32.0],
-                             "approach_track": "ballasted", "bridge_track": "slab"}},
-    "simulation": {"train": {"composition": ["trailer"]}, "end_x_m": 40.0, "batch_size": 1},
-    "fields": {
-        "method": "kle", "kernel": "exponential", "correlation_length_m": 10.0,
-        "variance_fraction": 0.9, "geometry": {"source": "structure"},
-        "groups": {"C2": {"enabled": True, "distribution": "normal", "cov": 0.1,
-                          "correlation": [[1.0, 0.7, 0.7, 0.7], [0.7, 1.0, 0.8, 0.8],
-                                          [0.7, 0.8, 1.0, 0.9], [0.7, 0.8, 0.9, 1.0]]}}},
-    # the run is too short for the standards' windows; the compiled kernels do not depend on it
-    "assessment": {"standard": []},
-}
+# The tiny fields study of tests/test_study_batch.py (one trailer car, one 32 m span; its
+# assessment is off: the run is too short for the standards' windows, and the compiled kernels do
+# not depend on it), with one C2 sample.
+TINY = copy.deepcopy(BATCH_CONFIG)
+TINY["study"]["scenarios"]["fields"]["samples"] = 1
 
 
 def test_compiling_case_is_the_sample_case_shortened(monkeypatch):
