@@ -222,7 +222,7 @@ def _coupled_loop(state, placed, packed, window, mesh, monitors, train, dt, n_st
     q, v, a, a_prev = state.q, state.v, state.a, state.a_prev
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
     _evaluate(0.0, state, placed, work, packed, window, mesh, ws_x, rail_kin, 0.0)
-    out_row = 0
+    out_row = np.int64(0)   # not a literal 0: numba would compile the recorders for it too
     for n in range(-1, n_steps):
         if n >= 0:
             psi = 0.0 if n == 0 else 0.5
@@ -283,7 +283,7 @@ def _coupled_loop_pair(state, state_b, placed, placed_b, packed, mesh, monitors,
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
     _evaluate_pair(0.0, state, state_b, placed, placed_b, work, work_b, packed, mesh, scratch,
                    0.0)
-    out_row = 0
+    out_row = np.int64(0)   # not a literal 0: numba would compile the recorders for it too
     for n in range(-1, n_steps):
         if n >= 0:
             psi = 0.0 if n == 0 else 0.5

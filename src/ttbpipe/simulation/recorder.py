@@ -147,7 +147,7 @@ def record_wheel_step(rec, wheel, step):
             if wheel[w, k, 4] > 0.0:
                 in_contact += 1
                 contact_loss[w, k, 4] = -1
-                qp = derailment_coefficient(fy, fz, True)
+                qp = derailment_coefficient(fy, fz, np.bool_(True))
                 if qp > wheel_peak[w, k, 3]:
                     wheel_peak[w, k, 3] = qp
             else:
