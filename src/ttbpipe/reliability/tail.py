@@ -471,9 +471,10 @@ def _nll(model, theta) -> float:
     return model.nll(theta)
 
 
-def _minimise(fun, starts, tol: float = 1e-8):
+def _minimise(fun, starts, tol: float = 1e-8, restart: bool = True):
     """Nelder-Mead from each feasible start, restarted once at the best point (a simplex that
-    collapsed early is rebuilt there; Nelder & Mead 1965 restarts as in Press et al. §10.5)."""
+    collapsed early is rebuilt there; Nelder & Mead 1965 restarts as in Press et al. §10.5).
+    ``restart=False``: no restart (a start at the generating parameters of a simulated sample)."""
     best = None
     opts = {"xatol": tol, "fatol": tol, "maxiter": 4000, "maxfev": 8000}
     for s in starts:
@@ -484,12 +485,14 @@ def _minimise(fun, starts, tol: float = 1e-8):
             best = res
     if best is None:
         return None
+    if not restart:
+        return best
     again = optimize.minimize(fun, best.x, method="Nelder-Mead", options=opts)
     return again if again.fun <= best.fun else best
 
 
-def _fit(model, starts, min_shape: float, tol: float = 1e-8):
-    res = _minimise(lambda t: _nll(model, t), starts, tol)
+def _fit(model, starts, min_shape: float, tol: float = 1e-8, restart: bool = True):
+    res = _minimise(lambda t: _nll(model, t), starts, tol, restart)
     if res is None or not np.isfinite(res.fun):
         raise TailNotEstimable(f"{model.name} fit failed: no starting value inside the support")
     if not res.success:
@@ -861,7 +864,8 @@ def _gof_pvalue(model, theta, statistic: float, n_eff: float, settings: TailSett
     for _ in range(b):
         sim = model.simulate(theta, size, rng)
         try:
-            t, _ = _fit(sim, [theta], _XI_MIN, tol=1e-6)
+            # started at the parameters it was drawn from, next to its optimum: no restart
+            t, _ = _fit(sim, [theta], _XI_MIN, tol=1e-6, restart=False)
         except TailNotEstimable:
             continue
         u, w = sim.pit(t)
