@@ -32,7 +32,8 @@ COMPILE_RUN_OUTPUT_INTERVALS = 20
 
 
 class _CompileCounter:
-    """Counts numba's top-level compilations and their wall time (numba.core.event)."""
+    """Counts numba's compilations (those of callees included) and the wall time of the
+    outermost ones (numba.core.event)."""
 
     def __init__(self) -> None:
         from numba.core import event
@@ -95,32 +96,26 @@ def compile_study_kernels(config: Mapping[str, Any]) -> dict[str, Any]:
     from ..simulation.coupled import run_coupled
 
     record: dict[str, Any] = {"code_version": code_version()}
-    try:
-        case = compiling_case(config)
-    except (ValueError, KeyError, TypeError) as exc:
-        log.warning("coupled model's kernels not compiled ahead of the batches (each batch "
-                    "compiles what it needs): the study's nominal case could not be built: %s", exc)
-        return {**record, "kernels_compiled": 0, "error": str(exc)}
+    compiled = _CompileCounter()
     package_log = logging.getLogger("ttbpipe")
     level = package_log.level
     # the run's own warnings are about its record of a few hundredths of a second (too short
     # for Sperling's window, ...), not about the study
     package_log.setLevel(logging.ERROR)
     start = time.perf_counter()
-    error = None
     try:
-        with _CompileCounter() as compiled:
+        case = compiling_case(config)
+        with compiled:
             run_coupled(case)
     except Exception as exc:   # the batches run and report the samples themselves
-        error = f"{type(exc).__name__}: {exc}"
+        log.warning("coupled model's kernels not compiled ahead of the batches (%d compiled; each "
+                    "batch compiles what it lacks and reports its samples' errors): the study's "
+                    "nominal case failed: %s: %s", compiled.count, type(exc).__name__, exc)
+        return {**record, "kernels_compiled": compiled.count,
+                "error": f"{type(exc).__name__}: {exc}"}
     finally:
         package_log.setLevel(level)
     wall = time.perf_counter() - start
-    if error is not None:
-        log.warning("coupled model's compiling run failed after %.1f s (%d kernels compiled; the "
-                    "batches compile the rest and report their samples' errors): %s", wall,
-                    compiled.count, error)
-        return {**record, "kernels_compiled": compiled.count, "error": error}
     log.info("coupled model's kernels: %d compiled in %.1f s (%s), compiling run %.1f s wall",
              compiled.count, compiled.seconds,
              "the cache had them all" if compiled.count == 0 else "written to numba's cache",

@@ -149,7 +149,11 @@ def hertz_ellipse_mn(curv_a: float, curv_b: float) -> tuple[float, float]:
 # ---------------------------------------------------------------------------------------------
 # Geometry tables
 # ---------------------------------------------------------------------------------------------
-COL_Y, COL_R, COL_DZ, COL_DELTA, COL_M, COL_N, COL_ABSUM, COL_C11, COL_C22, COL_C23, COL_C33 = range(11)
+# The column indices are numpy integers: a plain int module constant is a literal type to
+# numba, which then compiles a separate copy of a kernel for each column it is called with
+# (``_lerp2`` had 14 copies).
+(COL_Y, COL_R, COL_DZ, COL_DELTA, COL_M, COL_N, COL_ABSUM, COL_C11, COL_C22, COL_C23,
+ COL_C33) = (np.int64(k) for k in range(11))
 N_COLS = 11
 
 
@@ -158,7 +162,7 @@ N_COLS = 11
 #: and from the rail's crown point e (m, track frame, towards the field side), the square of
 #: the wheelset yaw of the row's layer (rad^2) and the lead of the point ahead of the axle (m,
 #: track x, for positive yaw of the left wheel; odd in yaw).
-COL_G, COL_A, COL_E, COL_YAW2, COL_LEAD = 11, 12, 13, 14, 15
+COL_G, COL_A, COL_E, COL_YAW2, COL_LEAD = (np.int64(k) for k in range(11, 16))
 N_ZCOLS = 16
 #: Per-wheel results of :func:`_wheel_contact_points`: the seven of :func:`_wheel_contact`, then
 #: the generalised moments of the wheel's contact forces about the wheelset centre (roll, spin,
@@ -797,10 +801,7 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
 @njit(cache=True)
 def _lerp2(zk: np.ndarray, j: int, j1: int, wy: float, i: int, w: float, c: int) -> float:
     """Column ``c`` of one zone's tables (n_yaw, n, N_ZCOLS) at weight ``w`` between rows i and
-    i + 1 and weight ``wy`` between yaw layers j and j1 (bilinear).
-
-    Callers pass ``c`` as ``np.int64(COL_...)``: a bare module constant is a literal type to
-    numba, which then compiles one copy of this function per column (14 of them)."""
+    i + 1 and weight ``wy`` between yaw layers j and j1 (bilinear)."""
     lo = zk[j, i, c] * (1.0 - w) + zk[j, i + 1, c] * w
     if wy == 0.0:
         return lo
@@ -889,40 +890,40 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
     pen_max = -np.inf
     for k in range(n_z):
         zk = zones[k]
-        a = _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_A))
-        lever = _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_E)) - axis
+        a = _lerp2(zk, j, j1, wy, ih, wh, COL_A)
+        lever = _lerp2(zk, j, j1, wy, ih, wh, COL_E) - axis
         pen = (rail_z + side * lever * rail_roll - (ws_z + side * a * ws_roll)
-               + _lerp2(zk, j, j1, wy, i, w, np.int64(COL_DZ)))
+               + _lerp2(zk, j, j1, wy, i, w, COL_DZ))
         if pen > pen_max:
             pen_max = pen
         pts[k, 0] = 0.0
         if pen <= 0.0:
             continue
-        delta = _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_DELTA))
-        g_k = _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_G))
+        delta = _lerp2(zk, j, j1, wy, ih, wh, COL_DELTA)
+        g_k = _lerp2(zk, j, j1, wy, ih, wh, COL_G)
         cos_d = np.cos(delta)
         normal = _hertz_force(pen * cos_d, g_k)
         if normal <= 0.0:
             continue
-        absum = _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_ABSUM))
+        absum = _lerp2(zk, j, j1, wy, ih, wh, COL_ABSUM)
         c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * absum)) ** (1.0 / 3.0)
-        m_k = _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_M))
-        n_k = _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_N))
+        m_k = _lerp2(zk, j, j1, wy, ih, wh, COL_M)
+        n_k = _lerp2(zk, j, j1, wy, ih, wh, COL_N)
         ab = m_k * n_k * c * c
         pts[k, 10] = m_k * c
         pts[k, 11] = n_k * c
-        f22 = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_C22))
+        f22 = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C22)
         pts[k, 0] = normal
-        pts[k, 1] = _lerp2(zk, j, j1, wy, i, w, np.int64(COL_R))
+        pts[k, 1] = _lerp2(zk, j, j1, wy, i, w, COL_R)
         pts[k, 2] = delta
         pts[k, 3] = a
         pts[k, 4] = lever
-        pts[k, 5] = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_C11))
+        pts[k, 5] = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C11)
         pts[k, 6] = f22
-        pts[k, 7] = g_shear * ab ** 1.5 * _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_C23))
-        pts[k, 8] = g_shear * ab * ab * _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_C33))
+        pts[k, 7] = g_shear * ab ** 1.5 * _lerp2(zk, j, j1, wy, ih, wh, COL_C23)
+        pts[k, 8] = g_shear * ab * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C33)
         pts[k, 9] = cos_d
-        pts[k, 12] = lead_sign * _lerp2(zk, j, j1, wy, ih, wh, np.int64(COL_LEAD))
+        pts[k, 12] = lead_sign * _lerp2(zk, j, j1, wy, ih, wh, COL_LEAD)
         f22_sum += f22
     g = f22_sum * creep_relax
     fx_sum = 0.0
