@@ -10,8 +10,10 @@ import pandas as pd
 import pytest
 from scipy import stats
 
+from scipy import optimize
+
 from ttbpipe.reliability.tail import (_GEV, _POT, TailNotEstimable, TailSettings, _Gumbel,
-                                      _weighted_ad, estimate_tail, reliability_index)
+                                      _Objective, _weighted_ad, estimate_tail, reliability_index)
 from ttbpipe.stats.limits import ConstantLimit, LimitContext
 from ttbpipe.stats.reliability import (MET, NOT_MET, NOT_SHOWN, ReliabilitySettings,
                                        assess_limits, target_verdict)
@@ -50,13 +52,80 @@ def test_the_fitted_likelihoods_equal_the_numpy_log_densities():
             theta = np.array([rng.normal(10.0, 3.0) if model.name != "POT" else rng.normal(0, 2),
                               rng.normal(0.7, 0.8), rng.uniform(-0.9, 1.5)])[:2 if model.name ==
                                                                              "Gumbel" else 3]
-            fast, slow = model.nll(theta), _numpy_nll(model, theta)
+            fast, slow = _Objective(model)(theta), _numpy_nll(model, theta)
             if np.isinf(slow):
                 assert np.isinf(fast)
                 infinite += 1
             else:
                 assert abs(fast - slow) <= 1e-12 * max(1.0, abs(slow))
     assert infinite > 50                       # the support's edge was exercised
+
+
+def _tail_models(rng, n):
+    """A GEV (weighted), a Gumbel and a POT model on standardised samples of size about n."""
+    x = stats.genextreme.rvs(rng.uniform(-0.3, 0.3), size=n, random_state=rng)
+    x = (x - np.median(x)) / x.std()
+    y = stats.expon.rvs(size=n + 40, random_state=rng)
+    return [_GEV(x, rng.uniform(0.5, 2.0, n), -0.5), _Gumbel(x, np.ones(n), -0.5),
+            _POT(y, np.ones(y.size), float(np.quantile(y, 0.6)), -0.5)]
+
+
+def test_profile_objective_equals_the_models_from_logp():
+    # the compiled profile objective against the models' closed forms (from_logp: Coles 2001
+    # eq. 3.4 and its POT analogue) followed by the likelihood: the same operations, so equal
+    # bit for bit, and +inf exactly where from_logp has no solution
+    rng = np.random.default_rng(11)
+    infinite = 0
+    for model in _tail_models(rng, 40):
+        z = float(np.max(model.x)) + 0.5
+        for _ in range(300):
+            lp = rng.uniform(-25.0, 0.5)
+            free = np.array([rng.normal(0.0, 0.8), rng.uniform(-0.9, 1.5)])[
+                :1 if model.name == "Gumbel" else 2]
+            theta = model.from_logp(lp, free, z)
+            slow = np.inf if theta is None else _Objective(model)(theta)
+            fast = _Objective(model, profile=(lp, z))(free)
+            assert fast == slow or (np.isinf(fast) and np.isinf(slow))
+            infinite += np.isinf(slow)
+    assert infinite > 50                       # no-solution and outside-support points exercised
+
+
+def test_compiled_nelder_mead_repeats_scipy_step_for_step():
+    # the compiled simplex against SciPy's minimize(method="Nelder-Mead") on the same compiled
+    # objectives: identical end point, value, iteration and evaluation counts and status (exact
+    # equality: the same arithmetic in the same order), from random starts, on the likelihoods
+    # and the profile objectives, with budgets that stop it early
+    rng = np.random.default_rng(3)
+    cases = 0
+    for trial in range(25):
+        for model in _tail_models(rng, int(rng.integers(8, 80))):
+            k = 2 if model.name == "Gumbel" else 3
+            start = model.starts()[-1] + rng.normal(0.0, 0.3, k)
+            z = float(np.max(model.x)) + 0.3
+            lp = float(model.log_p(start, z)) if trial % 2 else rng.uniform(-12.0, -2.0)
+            objectives = [(_Objective(model), start),
+                          (_Objective(model, profile=(lp, z)), model.free(start))]
+            budgets = [(1e-8, 4000, 8000), (1e-6, 4000, 8000)]
+            if trial < 3:
+                budgets += [(1e-8, 4000, 7), (1e-8, 4000, 31), (1e-8, 5, 8000), (1e-8, 6, 13)]
+            for fun, x0 in objectives:
+                if not np.isfinite(fun(x0)):
+                    continue
+                for tol, maxiter, maxfev in budgets:
+                    ref = optimize.minimize(fun, x0, method="Nelder-Mead", options={
+                        "xatol": tol, "fatol": tol, "maxiter": maxiter, "maxfev": maxfev})
+                    got = _nelder_mead_run(fun, x0, tol, maxiter, maxfev)
+                    assert np.array_equal(got[0], ref.x) and got[1] == ref.fun
+                    assert got[2:] == (ref.nit, ref.nfev, ref.status)
+                    cases += 1
+    assert cases > 250                         # most profile starts are feasible
+
+
+def _nelder_mead_run(fun, x0, tol, maxiter, maxfev):
+    from ttbpipe.reliability.tail import _nelder_mead
+    x, f, nit, nfev, status = _nelder_mead(fun._kind, *fun._data, fun._lp, fun._z,
+                                           np.array(x0, dtype=float), tol, tol, maxiter, maxfev)
+    return x, f, nit, nfev, status
 
 
 def test_gev_interval_contains_exact_gumbel_tail_probability():

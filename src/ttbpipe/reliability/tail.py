@@ -242,6 +242,217 @@ def _pot_nll(above, e, a, eta, lsig, xi):
     return total if np.isfinite(total) else np.inf
 
 
+#: Objectives of :func:`_nelder_mead`, one code per model: its likelihood (``nll``) in all
+#: parameters, or (``+ _PROFILE``) its profile objective in the free parameters at a fixed
+#: ``log p`` at the limit (``nll(from_logp(lp, free, z))``, :func:`_profile_interval`).
+_KIND_GEV, _KIND_GUMBEL, _KIND_POT = 0, 1, 2
+_PROFILE = 3
+#: Placeholders for the arrays a model's objective does not read (typed as the real ones).
+_NO_FLAGS, _NO_VALUES = np.zeros(0, dtype=np.bool_), np.zeros(0)
+
+
+@njit(cache=True)
+def _shape_nll(kind, x, a, above, e, xi_min, first, lsig, xi):
+    """The GEV (``first`` = mu) or POT (``first`` = eta) negative log-likelihood, +inf outside
+    the shape's range ``[xi_min, 5)`` (the optimiser's parameter space)."""
+    if not (xi_min <= xi and xi < _XI_MAX):
+        return np.inf
+    if kind == _KIND_GEV:
+        return _gev_nll(x, a, first, lsig, xi)
+    return _pot_nll(above, e, a, first, lsig, xi)
+
+
+@njit(cache=True)
+def _objective(kind, x, a, above, e, xi_min, u, lp, z, v):
+    """The objective ``kind`` at ``v``: a model's negative log-likelihood (theta = v), or its
+    profile at ``log p = lp`` of exceeding ``z`` (v the free parameters; the models'
+    ``from_logp``, +inf where it has no solution). The same operations as the models' methods,
+    so the same values."""
+    if kind == _KIND_GUMBEL:
+        return _gev_nll(x, a, v[0], v[1], 0.0)
+    if kind < _PROFILE:
+        return _shape_nll(kind, x, a, above, e, xi_min, v[0], v[1], v[2])
+    base = kind - _PROFILE
+    lsig = v[0]
+    if base == _KIND_POT:
+        xi = v[1]
+        l = _log1p_over_xi(xi, (z - u) / np.exp(lsig))
+        log_zeta = lp - (-np.inf if np.isnan(l) else -l)
+        if not (np.isfinite(log_zeta) and log_zeta < 0.0):
+            return np.inf
+        eta = log_zeta - np.log(-np.expm1(log_zeta))
+        return _shape_nll(base, x, a, above, e, xi_min, eta, lsig, xi)
+    if not lp < 0.0:
+        return np.inf
+    big_l = np.log(-np.log1p(-np.exp(lp)))
+    if base == _KIND_GUMBEL:
+        return _gev_nll(x, a, z + np.exp(lsig) * big_l, lsig, 0.0)
+    xi = v[1]
+    ratio = -big_l if abs(xi) < _XI_ZERO else np.expm1(-xi * big_l) / xi
+    return _shape_nll(base, x, a, above, e, xi_min, z - np.exp(lsig) * ratio, lsig, xi)
+
+
+#: Nelder-Mead's moves within one step (:func:`_nelder_mead`).
+_NM_REFLECT, _NM_EXPAND, _NM_OUTSIDE, _NM_INSIDE, _NM_SHRINK = 0, 1, 2, 3, 4
+
+
+@njit(cache=True)
+def _nm_less(f1, f2):
+    """numpy's sort order of floats: NaN after every number."""
+    return f1 < f2 or (f2 != f2 and f1 == f1)
+
+
+@njit(cache=True)
+def _nm_set(sim, row, values):
+    """``sim[row] = values`` as a loop (numba compiles loops faster than array expressions)."""
+    for k in range(values.shape[0]):
+        sim[row, k] = values[k]
+
+
+@njit(cache=True)
+def _nm_sort(sim, fsim):
+    """Both arrays in ascending order of ``fsim`` by a stable insertion sort: the order of
+    ``np.argsort`` (numpy sorts arrays this short by insertion), so ties keep their places."""
+    m, n = sim.shape
+    row = np.empty(n)
+    for i in range(1, m):
+        f = fsim[i]
+        for k in range(n):
+            row[k] = sim[i, k]
+        j = i - 1
+        while j >= 0 and _nm_less(f, fsim[j]):
+            fsim[j + 1] = fsim[j]
+            for k in range(n):
+                sim[j + 1, k] = sim[j, k]
+            j -= 1
+        fsim[j + 1] = f
+        for k in range(n):
+            sim[j + 1, k] = row[k]
+
+
+@njit(cache=True)
+def _nelder_mead(kind, x, a, above, e, xi_min, u, lp, z, x0, xatol, fatol, maxiter,
+                 maxfev):
+    """Minimise the objective ``kind`` (:func:`_objective`) from ``x0`` by Nelder & Mead's
+    simplex method (1965), step for step SciPy's ``minimize(method='Nelder-Mead')`` without
+    bounds (SciPy 1.17, ``scipy.optimize._optimize._minimize_neldermead``: coefficients rho 1,
+    chi 2, psi 0.5, sigma 0.5; initial simplex x0 with one coordinate at a time times 1.05, or
+    0.00025 where it is 0; stop when every vertex is within ``xatol`` of the best and every
+    value within ``fatol``), with the same arithmetic, so the same iterates bit for bit
+    (tests/test_reliability_tail.py compares them). Compiled because a study's tail fits run
+    several thousand of these, where SciPy's per-iteration Python was most of the time
+    (docs/performance.md). The objective is a closed set of codes, not a function argument:
+    numba does not cache a kernel that takes a compiled function as an argument.
+
+    Returns (x, f, iterations, evaluations, status): status 0 converged, 1 ``maxfev`` reached,
+    2 ``maxiter`` reached (SciPy's ``warnflag``)."""
+    n = x0.shape[0]
+    sim = np.empty((n + 1, n))
+    for k in range(n + 1):
+        _nm_set(sim, k, x0)
+    for k in range(n):
+        sim[k + 1, k] = (1 + 0.05) * x0[k] if x0[k] != 0 else 0.00025
+    fsim = np.full(n + 1, np.inf)
+    calls = 0
+    for k in range(n + 1):
+        if calls >= maxfev:
+            break
+        calls += 1
+        fsim[k] = _objective(kind, x, a, above, e, xi_min, u, lp, z, sim[k])
+    _nm_sort(sim, fsim)
+    iterations = 1
+    xbar = np.empty(n)
+    xr = np.empty(n)
+    point = np.empty(n)
+    while calls < maxfev and iterations < maxiter:
+        done = True
+        for j in range(1, n + 1):
+            for i in range(n):
+                if not abs(sim[j, i] - sim[0, i]) <= xatol:
+                    done = False
+            if not abs(fsim[0] - fsim[j]) <= fatol:
+                done = False
+        if done:
+            break
+        # xbar = np.add.reduce(sim[:-1], 0) / N: rows summed in order, then divided
+        for i in range(n):
+            total = sim[0, i]
+            for j in range(1, n):
+                total += sim[j, i]
+            xbar[i] = total / n
+        # One step as a sequence of evaluations: reflect, then expand, contract outside or
+        # inside, or shrink vertex by vertex. Leaves the step when it is complete, or when the
+        # evaluations run out (then, as in SciPy, the step is not counted).
+        phase = _NM_REFLECT
+        fxr = np.inf
+        vertex = 1
+        out_of_calls = False
+        while True:
+            for i in range(n):   # SciPy's vector expressions, element by element
+                if phase == _NM_SHRINK:
+                    sim[vertex, i] = sim[0, i] + 0.5 * (sim[vertex, i] - sim[0, i])
+                    point[i] = sim[vertex, i]
+                elif phase == _NM_REFLECT:
+                    point[i] = 2.0 * xbar[i] - sim[n, i]
+                elif phase == _NM_EXPAND:
+                    point[i] = 3.0 * xbar[i] - 2.0 * sim[n, i]
+                elif phase == _NM_OUTSIDE:
+                    point[i] = 1.5 * xbar[i] - 0.5 * sim[n, i]
+                else:
+                    point[i] = 0.5 * xbar[i] + 0.5 * sim[n, i]
+            if calls >= maxfev:
+                out_of_calls = True
+                break
+            calls += 1
+            f = _objective(kind, x, a, above, e, xi_min, u, lp, z, point)
+            if phase == _NM_REFLECT:
+                fxr = f
+                for i in range(n):
+                    xr[i] = point[i]
+                if fxr < fsim[0]:
+                    phase = _NM_EXPAND
+                elif fxr < fsim[n - 1]:
+                    _nm_set(sim, n, xr)
+                    fsim[n] = fxr
+                    break
+                elif fxr < fsim[n]:
+                    phase = _NM_OUTSIDE
+                else:
+                    phase = _NM_INSIDE
+            elif phase == _NM_EXPAND:
+                if f < fxr:
+                    _nm_set(sim, n, point)
+                    fsim[n] = f
+                else:
+                    _nm_set(sim, n, xr)
+                    fsim[n] = fxr
+                break
+            elif phase == _NM_OUTSIDE or phase == _NM_INSIDE:
+                if f <= fxr if phase == _NM_OUTSIDE else f < fsim[n]:
+                    _nm_set(sim, n, point)
+                    fsim[n] = f
+                    break
+                phase = _NM_SHRINK
+            else:
+                fsim[vertex] = f
+                vertex += 1
+                if vertex > n:
+                    break
+        if not out_of_calls:
+            iterations += 1
+        _nm_sort(sim, fsim)
+    fval = fsim[0]
+    for j in range(n + 1):
+        if fsim[j] != fsim[j]:
+            fval = np.nan
+    status = 0
+    if calls >= maxfev:
+        status = 1
+    elif iterations >= maxiter:
+        status = 2
+    return sim[0].copy(), fval, iterations, calls, status
+
+
 class _GEV:
     """GEV of the maxima; theta = (mu, log sigma, xi) on standardised data (Coles 2001 §3.3)."""
 
@@ -260,12 +471,13 @@ class _GEV:
         out = -lsig - (1.0 + xi) * l - np.exp(-l)
         return np.where(ok, out, -np.inf)
 
-    def nll(self, theta) -> float:
-        """-sum a_i log f(x_i) (+inf outside the support or the shape's range)."""
-        mu, lsig, xi = theta
-        if not self.xi_min <= xi < _XI_MAX:
-            return np.inf
-        return _gev_nll(self.x, self.a, float(mu), float(lsig), float(xi))
+    def kernel_data(self) -> tuple:
+        """The leading arguments of :func:`_objective` (and :func:`_nelder_mead`) for this
+        model: its code, the data as contiguous arrays, the shape's lower bound and the
+        threshold (POT; 0 otherwise)."""
+        return (_KIND_GEV, np.ascontiguousarray(self.x, dtype=float),
+                np.ascontiguousarray(self.a, dtype=float), _NO_FLAGS, _NO_VALUES,
+                float(self.xi_min), 0.0)
 
     def log_p(self, theta, z: float) -> float:
         mu, lsig, xi = theta
@@ -276,7 +488,9 @@ class _GEV:
         return float(np.log(-np.expm1(-s))) if s > 0 else -np.inf
 
     def from_logp(self, lp: float, free, z: float):
-        """mu from p at z: ``z = mu + sigma ((-log(1-p))^(-xi) - 1)/xi`` (Coles 2001 eq. 3.4)."""
+        """mu from p at z: ``z = mu + sigma ((-log(1-p))^(-xi) - 1)/xi`` (Coles 2001 eq. 3.4).
+        The models' ``from_logp`` are the readable form of the compiled profile objective
+        (:func:`_objective`), which tests/test_reliability_tail.py compares with them."""
         lsig, xi = free
         if not lp < 0.0:
             return None
@@ -339,9 +553,8 @@ class _Gumbel(_GEV):
         y = (self.x - mu) / np.exp(lsig)
         return -lsig - y - np.exp(-y)            # Coles 2001 eq. 3.9 (xi -> 0)
 
-    def nll(self, theta) -> float:
-        mu, lsig = theta
-        return _gev_nll(self.x, self.a, float(mu), float(lsig), 0.0)
+    def kernel_data(self) -> tuple:
+        return (_KIND_GUMBEL, *super().kernel_data()[1:])
 
     def log_p(self, theta, z: float) -> float:
         mu, lsig = theta
@@ -396,11 +609,10 @@ class _POT:
         gpd = np.where(ok, -lsig - (1.0 + xi) * l, -np.inf)      # Coles 2001 eq. 4.10
         return np.where(self.above, -np.logaddexp(0.0, -eta) + gpd, -np.logaddexp(0.0, eta))
 
-    def nll(self, theta) -> float:
-        eta, lsig, xi = theta
-        if not self.xi_min <= xi < _XI_MAX:
-            return np.inf
-        return _pot_nll(self.above, self.e, self.a, float(eta), float(lsig), float(xi))
+    def kernel_data(self) -> tuple:
+        return (_KIND_POT, _NO_VALUES, np.ascontiguousarray(self.a, dtype=float),
+                np.ascontiguousarray(self.above, dtype=np.bool_),
+                np.ascontiguousarray(self.e, dtype=float), float(self.xi_min), float(self.u))
 
     def _log_survival(self, lsig, xi, d: float) -> float:
         l, ok = _log1p_ratio(xi, np.array([d / np.exp(lsig)]))
@@ -464,35 +676,56 @@ class _POT:
 
 # --- fitting -----------------------------------------------------------------------------------
 
-def _nll(model, theta) -> float:
-    """The weighted negative log-likelihood at theta (+inf outside the parameter space)."""
-    if theta is None:
-        return np.inf
-    return model.nll(theta)
+#: Nelder-Mead's iteration and evaluation budgets (SciPy's ``maxiter``, ``maxfev``).
+_NM_MAXITER, _NM_MAXFEV = 4000, 8000
+_NM_MESSAGES = ("Optimization terminated successfully.",
+                "Maximum number of function evaluations has been exceeded.",
+                "Maximum number of iterations has been exceeded.")
 
 
-def _minimise(fun, starts, tol: float = 1e-8, restart: bool = True):
-    """Nelder-Mead from each feasible start, restarted once at the best point (a simplex that
-    collapsed early is rebuilt there; Nelder & Mead 1965 restarts as in Press et al. §10.5).
-    ``restart=False``: no restart (a start at the generating parameters of a simulated sample)."""
-    best = None
-    opts = {"xatol": tol, "fatol": tol, "maxiter": 4000, "maxfev": 8000}
-    for s in starts:
-        if not np.isfinite(fun(s)):
-            continue
-        res = optimize.minimize(fun, s, method="Nelder-Mead", options=opts)
-        if best is None or res.fun < best.fun:
-            best = res
-    if best is None:
-        return None
-    if not restart:
-        return best
-    again = optimize.minimize(fun, best.x, method="Nelder-Mead", options=opts)
-    return again if again.fun <= best.fun else best
+class _Objective:
+    """A model's likelihood, or with ``profile = (log p, z)`` its profile objective in the free
+    parameters (:func:`_objective`: ``nll(from_logp(log p, free, z))``), compiled; called at a
+    point it gives the value, :meth:`minimise` runs the compiled Nelder-Mead on it."""
+
+    def __init__(self, model, profile: tuple[float, float] | None = None) -> None:
+        kind, *self._data = model.kernel_data()
+        self._kind = kind + (_PROFILE if profile is not None else 0)
+        self._lp, self._z = (0.0, 0.0) if profile is None else map(float, profile)
+
+    def __call__(self, v) -> float:
+        return float(_objective(self._kind, *self._data, self._lp, self._z,
+                                np.asarray(v, dtype=float)))
+
+    def _solve(self, start, tol: float):
+        x, f, nit, nfev, status = _nelder_mead(self._kind, *self._data, self._lp, self._z,
+                                               np.array(start, dtype=float), tol, tol,
+                                               _NM_MAXITER, _NM_MAXFEV)
+        return optimize.OptimizeResult(x=x, fun=float(f), nit=nit, nfev=nfev, status=status,
+                                       success=status == 0, message=_NM_MESSAGES[status])
+
+    def minimise(self, starts, tol: float = 1e-8, restart: bool = True):
+        """Nelder-Mead from each feasible start, restarted once at the best point (a simplex
+        that collapsed early is rebuilt there; Nelder & Mead 1965 restarts as in Press et al.
+        §10.5). ``restart=False``: no restart (a start at the generating parameters of a
+        simulated sample). None when no start is feasible."""
+        best = None
+        for s in starts:
+            if not np.isfinite(self(s)):
+                continue
+            res = self._solve(s, tol)
+            if best is None or res.fun < best.fun:
+                best = res
+        if best is None:
+            return None
+        if not restart:
+            return best
+        again = self._solve(best.x, tol)
+        return again if again.fun <= best.fun else best
 
 
 def _fit(model, starts, min_shape: float, tol: float = 1e-8, restart: bool = True):
-    res = _minimise(lambda t: _nll(model, t), starts, tol, restart)
+    res = _Objective(model).minimise(starts, tol, restart)
     if res is None or not np.isfinite(res.fun):
         raise TailNotEstimable(f"{model.name} fit failed: no starting value inside the support")
     if not res.success:
@@ -752,13 +985,13 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
                  for xi in (0.0, 0.1, 0.3, max(model.xi_min, -0.2))]
 
     def prof(lp):
-        fun = lambda f: _nll(model, model.from_logp(lp, f, z))
+        fun = _Objective(model, profile=(lp, z))
         starts = next(([s] for s in (warm[-1], fixed) if np.isfinite(fun(s))), None)
         if starts is None:
             values = [fun(s) for s in grid]
             k = int(np.argmin(values))
             starts = [grid[k]] if np.isfinite(values[k]) else []
-        res = _minimise(fun, starts, tol=1e-6)
+        res = fun.minimise(starts, tol=1e-6)
         if res is None or not np.isfinite(res.fun):
             return np.inf
         warm.append(res.x)
