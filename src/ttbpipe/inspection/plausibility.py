@@ -36,7 +36,6 @@ from pathlib import Path
 from typing import Mapping
 
 import numpy as np
-import scipy.signal
 
 from ..channels import INSPECTION_COLUMNS
 from .format import InspectionError
@@ -139,9 +138,10 @@ def band_rms_mm(values: np.ndarray, step_m: float, wavelength_band_m: tuple[floa
     scaling so that the integral of the PSD is the variance) integrated over
     1/longest..1/shortest wavelength (discrete Parseval, physics.md section 2).
     """
-    frequency, psd = scipy.signal.periodogram(np.asarray(values, dtype=float), fs=1.0 / step_m,
-                                              window="hann", detrend="linear",
-                                              scaling="density")
+    from scipy import signal   # on use: importing scipy.signal takes about 1 s
+
+    frequency, psd = signal.periodogram(np.asarray(values, dtype=float), fs=1.0 / step_m,
+                                        window="hann", detrend="linear", scaling="density")
     keep = ((frequency >= 1.0 / wavelength_band_m[1] * (1 - 1e-12))
             & (frequency <= 1.0 / wavelength_band_m[0] * (1 + 1e-12)))
     return float(math.sqrt(float(psd[keep].sum()) * (frequency[1] - frequency[0])))

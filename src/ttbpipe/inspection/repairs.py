@@ -12,7 +12,6 @@ import logging
 import warnings
 
 import numpy as np
-import scipy.signal
 
 from ..channels import INSPECTION_COLUMNS
 from .checks import true_runs
@@ -113,9 +112,11 @@ def detrend_channels(repaired: np.ndarray, x: np.ndarray, detrend: str,
     """Step 8: remove each channel's trend (``detrend``: ``none`` | ``constant`` | ``linear``)
     in place, reporting the removed mean and slope."""
     if detrend != "none":
+        from scipy import signal   # on use: importing scipy.signal takes about 1 s
+
         span = x[-1] - x[0]
         for c, col in enumerate(INSPECTION_COLUMNS):
-            detrended = scipy.signal.detrend(repaired[:, c], type=detrend)
+            detrended = signal.detrend(repaired[:, c], type=detrend)
             trend = repaired[:, c] - detrended
             report.trend_removed[col] = {
                 "mean_mm": float(np.mean(trend)),

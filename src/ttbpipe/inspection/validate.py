@@ -61,7 +61,6 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
-import scipy.signal
 
 from ..channels import INSPECTION_COLUMNS
 from .checks import (COMMON_STEP_TOLERANCE, COMMON_STEPS_M, MAX_STEP_M, MIN_STEP_M,
@@ -286,7 +285,9 @@ def _clean_campaign(df: pd.DataFrame, source: str, renamed: dict[str, str],
     columns = {col: repaired[:, c] for c, col in enumerate(INSPECTION_COLUMNS)}
     difference = columns["cross_level_mm"] - (columns["vertical_left_mm"]
                                               - columns["vertical_right_mm"])
-    difference = scipy.signal.detrend(difference, type="linear")
+    from scipy import signal   # on use: importing scipy.signal takes about 1 s
+
+    difference = signal.detrend(difference, type="linear")
     report.cross_level_rms_difference_mm = float(np.sqrt(np.mean(difference ** 2)))
     logger.info("%s: RMS of cross_level - (vertical_left - vertical_right) = %.3f mm "
                 "(information; different sensors)", source,

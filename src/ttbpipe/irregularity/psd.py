@@ -33,7 +33,6 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
-from scipy import signal
 
 from ..channels import INSPECTION_COLUMNS, SPECTRAL_CHANNELS, spectral_from_inspection
 from ..configuration import section_defaults
@@ -90,6 +89,11 @@ def welch_psd(profile_mm, dx_m: float, segment_length_m: float, overlap: float =
                          "clean the campaign first (ttbpipe check-inspection)")
     if not 0.0 <= overlap < 1.0:
         raise ValueError(f"overlap must be a fraction in [0, 1), got {overlap!r}")
+    # on use: importing scipy.signal takes about 1 s (SciPy 1.17 rewrites the docstrings of its
+    # functions on import), which every process importing ttbpipe.irregularity or
+    # ttbpipe.inspection paid, the Snakefile's and the TIPM stages' among them
+    from scipy import signal
+
     nperseg = _segment_points(segment_length_m, dx_m, profile.size)
     noverlap = int(round(overlap * nperseg))
     frequencies, psd = signal.welch(profile, fs=1.0 / dx_m, window=window, nperseg=nperseg,
