@@ -138,7 +138,7 @@ def band_rms_mm(values: np.ndarray, step_m: float, wavelength_band_m: tuple[floa
     scaling so that the integral of the PSD is the variance) integrated over
     1/longest..1/shortest wavelength (discrete Parseval, physics.md section 2).
     """
-    from scipy import signal   # on use: importing scipy.signal takes about 1 s
+    from scipy import signal   # on use, as in ttbpipe.irregularity.psd.welch_psd
 
     frequency, psd = signal.periodogram(np.asarray(values, dtype=float), fs=1.0 / step_m,
                                         window="hann", detrend="linear", scaling="density")

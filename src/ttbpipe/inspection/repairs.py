@@ -112,7 +112,7 @@ def detrend_channels(repaired: np.ndarray, x: np.ndarray, detrend: str,
     """Step 8: remove each channel's trend (``detrend``: ``none`` | ``constant`` | ``linear``)
     in place, reporting the removed mean and slope."""
     if detrend != "none":
-        from scipy import signal   # on use: importing scipy.signal takes about 1 s
+        from scipy import signal   # on use, as in ttbpipe.irregularity.psd.welch_psd
 
         span = x[-1] - x[0]
         for c, col in enumerate(INSPECTION_COLUMNS):

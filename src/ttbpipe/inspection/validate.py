@@ -285,7 +285,7 @@ def _clean_campaign(df: pd.DataFrame, source: str, renamed: dict[str, str],
     columns = {col: repaired[:, c] for c, col in enumerate(INSPECTION_COLUMNS)}
     difference = columns["cross_level_mm"] - (columns["vertical_left_mm"]
                                               - columns["vertical_right_mm"])
-    from scipy import signal   # on use: importing scipy.signal takes about 1 s
+    from scipy import signal   # on use, as in ttbpipe.irregularity.psd.welch_psd
 
     difference = signal.detrend(difference, type="linear")
     report.cross_level_rms_difference_mm = float(np.sqrt(np.mean(difference ** 2)))
