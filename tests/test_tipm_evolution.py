@@ -5,7 +5,8 @@ import pandas as pd
 import pytest
 
 from ttbpipe.tipm import PSDPopulation
-from ttbpipe.tipm.evolution import SpectralEvolution, forecast_coverage, matched_transitions
+from ttbpipe.tipm.evolution import (SpectralEvolution, _nanquantile_columns, forecast_coverage,
+                                    matched_transitions)
 
 FREQ = np.array([0.01, 0.02, 0.03, 0.04])
 CHANNELS = ("vertical", "gauge")
@@ -123,3 +124,25 @@ def test_envelope_does_not_depend_on_chunking():
     chunked = model.envelope(state, 3, [0.1, 0.9], 40, np.random.default_rng(4), 0.01,
                              max_elements=40 * FREQ.size * 2 * 2)   # two items per chunk
     assert np.array_equal(whole[0], chunked[0]) and np.array_equal(whole[1], chunked[1])
+
+
+def test_nanquantile_columns_equals_numpy_nanquantile():
+    # the evolution fit's quantiles of every column at once against numpy's nanquantile (its
+    # reference: method 'linear', Hyndman & Fan's 7th): exactly equal, with ties, columns of one
+    # value, columns without values (NaN) and the probability grid's ends 0 and 1
+    import warnings
+
+    rng = np.random.default_rng(0)
+    for trial in range(200):
+        shape = (int(rng.integers(1, 40)), int(rng.integers(1, 6)), int(rng.integers(1, 4)))
+        values = rng.normal(size=shape)
+        if trial % 3 == 0:
+            values = np.round(values, 1)
+        values[rng.uniform(size=shape) < rng.uniform(0.0, 0.9)] = np.nan
+        if trial % 5 == 0:
+            values[:, 0, 0] = np.nan
+        q = np.linspace(0.0, 1.0, int(rng.integers(2, 60)))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)   # numpy: all-NaN slice
+            expected = np.nanquantile(values, q, axis=0)
+        assert np.array_equal(_nanquantile_columns(values, q), expected, equal_nan=True)

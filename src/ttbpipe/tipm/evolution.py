@@ -111,6 +111,35 @@ class _Fitted:
     probability_grid: np.ndarray
 
 
+def _nanquantile_columns(values: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``np.nanquantile(values, q, axis=0)`` (method ``linear``), the same numbers, for every
+    column at once: numpy takes the quantiles of each column with NaNs in a Python-level loop
+    (``apply_along_axis``), which was nine tenths of the evolution fit. Here one sort puts each
+    column's NaNs last; the virtual index ``(n - 1) q`` of its ``n`` values, the neighbours and
+    numpy's ``_lerp`` (``a + (b - a) t``, or ``b - (b - a)(1 - t)`` for ``t >= 0.5``) follow
+    numpy's ``_quantile``. A column without values gives NaN (numpy also warns).
+    tests/test_tipm_evolution.py compares the two."""
+    ordered = np.sort(values, axis=0)
+    count = np.sum(~np.isnan(values), axis=0)
+    q = np.asarray(q, dtype=float).reshape((-1,) + (1,) * count.ndim)
+    virtual = (count - 1) * q                                   # (Q, *columns)
+    previous = np.floor(virtual)
+    last = count - 1
+    above = virtual >= last
+    previous = np.where(above, -1.0, np.where(virtual < 0, 0.0, previous))
+    gamma = virtual - previous
+    prev_index = np.where(previous < 0, last, previous).astype(np.intp)
+    next_index = np.where(above, last, np.where(virtual < 0, 0, prev_index + 1)).astype(np.intp)
+    prev_index = np.clip(prev_index, 0, None)
+    next_index = np.clip(next_index, 0, None)
+    a = np.take_along_axis(ordered, prev_index, axis=0)
+    b = np.take_along_axis(ordered, next_index, axis=0)
+    diff = b - a
+    out = a + diff * gamma
+    np.subtract(b, diff * (1 - gamma), out=out, where=gamma >= 0.5)
+    return np.where(count > 0, out, np.nan)
+
+
 class SpectralEvolution:
     """Conditional increment model of PSD evolution (seed paper eqs. 50-56).
 
@@ -214,7 +243,7 @@ class SpectralEvolution:
             member = (labels >= lo) & (labels <= hi)
             pooled[..., g] = member.sum(axis=0)
             quantiles[:, :, g, :] = np.moveaxis(
-                np.nanquantile(np.where(member, increments, np.nan), grid, axis=0), 0, -1)
+                _nanquantile_columns(np.where(member, increments, np.nan), grid), 0, -1)
         n_pooled = int((pooled > counts).sum())
         if n_pooled:
             log.info("%d of %d partitions had < %d increments and pooled their neighbours",
