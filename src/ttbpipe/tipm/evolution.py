@@ -123,13 +123,15 @@ def _nanquantile_columns(values: np.ndarray, q: np.ndarray) -> np.ndarray:
     count = np.sum(~np.isnan(values), axis=0)
     q = np.asarray(q, dtype=float).reshape((-1,) + (1,) * count.ndim)
     virtual = (count - 1) * q                                   # (Q, *columns)
-    previous = np.floor(virtual)
     last = count - 1
+    # numpy's neighbours: floor and floor + 1; at or above the last value both are index -1
+    # (the last value), below 0 both are 0; its weight is the virtual index minus the lower one
     above = virtual >= last
-    previous = np.where(above, -1.0, np.where(virtual < 0, 0.0, previous))
+    previous = np.where(above, -1.0, np.where(virtual < 0, 0.0, np.floor(virtual)))
     gamma = virtual - previous
     prev_index = np.where(previous < 0, last, previous).astype(np.intp)
     next_index = np.where(above, last, np.where(virtual < 0, 0, prev_index + 1)).astype(np.intp)
+    # a column without values (last = -1) reads its first row, masked to NaN below
     prev_index = np.clip(prev_index, 0, None)
     next_index = np.clip(next_index, 0, None)
     a = np.take_along_axis(ordered, prev_index, axis=0)
