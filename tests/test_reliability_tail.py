@@ -8,9 +8,7 @@ with fixed seeds; exact tail probabilities from the same scipy distributions' ``
 import numpy as np
 import pandas as pd
 import pytest
-from scipy import stats
-
-from scipy import optimize
+from scipy import optimize, stats
 
 from ttbpipe.reliability.tail import (_GEV, _POT, TailNotEstimable, TailSettings, _Gumbel,
                                       _Objective, _weighted_ad, estimate_tail, reliability_index)
@@ -114,18 +112,12 @@ def test_compiled_nelder_mead_repeats_scipy_step_for_step():
                 for tol, maxiter, maxfev in budgets:
                     ref = optimize.minimize(fun, x0, method="Nelder-Mead", options={
                         "xatol": tol, "fatol": tol, "maxiter": maxiter, "maxfev": maxfev})
-                    got = _nelder_mead_run(fun, x0, tol, maxiter, maxfev)
-                    assert np.array_equal(got[0], ref.x) and got[1] == ref.fun
-                    assert got[2:] == (ref.nit, ref.nfev, ref.status)
+                    got = fun.solve(x0, tol, maxiter, maxfev)
+                    assert np.array_equal(got.x, ref.x) and got.fun == ref.fun
+                    assert (got.nit, got.nfev, got.status) == (ref.nit, ref.nfev, ref.status)
+                    assert got.success == ref.success and got.message == ref.message
                     cases += 1
     assert cases > 250                         # most profile starts are feasible
-
-
-def _nelder_mead_run(fun, x0, tol, maxiter, maxfev):
-    from ttbpipe.reliability.tail import _nelder_mead
-    x, f, nit, nfev, status = _nelder_mead(fun._kind, *fun._data, fun._lp, fun._z,
-                                           np.array(x0, dtype=float), tol, tol, maxiter, maxfev)
-    return x, f, nit, nfev, status
 
 
 def test_gev_interval_contains_exact_gumbel_tail_probability():

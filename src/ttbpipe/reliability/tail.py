@@ -697,10 +697,12 @@ class _Objective:
         return float(_objective(self._kind, *self._data, self._lp, self._z,
                                 np.asarray(v, dtype=float)))
 
-    def _solve(self, start, tol: float):
+    def solve(self, start, tol: float, maxiter: int = _NM_MAXITER, maxfev: int = _NM_MAXFEV):
+        """One compiled Nelder-Mead run from ``start`` (``xatol = fatol = tol``), as SciPy's
+        ``OptimizeResult`` (x, fun, nit, nfev, status, success, message)."""
         x, f, nit, nfev, status = _nelder_mead(self._kind, *self._data, self._lp, self._z,
                                                np.array(start, dtype=float), tol, tol,
-                                               _NM_MAXITER, _NM_MAXFEV)
+                                               maxiter, maxfev)
         return optimize.OptimizeResult(x=x, fun=float(f), nit=nit, nfev=nfev, status=status,
                                        success=status == 0, message=_NM_MESSAGES[status])
 
@@ -713,14 +715,14 @@ class _Objective:
         for s in starts:
             if not np.isfinite(self(s)):
                 continue
-            res = self._solve(s, tol)
+            res = self.solve(s, tol)
             if best is None or res.fun < best.fun:
                 best = res
         if best is None:
             return None
         if not restart:
             return best
-        again = self._solve(best.x, tol)
+        again = self.solve(best.x, tol)
         return again if again.fun <= best.fun else best
 
 
