@@ -18,7 +18,12 @@ Y/Q is taken in the flange-climbing sense of each wheel (Y > 0 pushing the flang
 rail: -Q for a left wheel, +Q for a right one), from the filtered Y and Q where the wheel is on
 the rail (0 where it is off, as the table's Q/P; the loss of contact is its own index). The
 whole run is one section: its percentiles are the section's statistics (the standard's
-combination of sections by test zone is not applied).
+combination of sections by test zone is not applied). On a layout with curves (:mod:`.track`)
+the limits follow the radius under each wheel: (Y/Q)2m is assessed where the wheel is within
+the limit's range (tangent track and R >= 250 m, option ``yq_min_radius_m``), smaller radii
+only against a limit given as ``yq_limit_small_radius`` (else reported in the row's notes); the
+quasi-static Q_qst and Y_qst are taken over each wheel's time on curves, where the standard
+assesses them.
 
 Limits (defaults, :data:`DEFAULTS`): (Y/Q)lim = 0.8 for R >= 250 m; (sum Y)2m,lim =
 alpha (10 + 2 Q0/3) kN with Q0 the static wheel force and alpha = 1 (0.85 for freight wagons)
@@ -37,8 +42,9 @@ import math
 import numpy as np
 
 from .base import Profile, Row, governing
-from .processing import Butterworth, percentile, sliding_mean
+from .processing import Butterworth, percentile, percentile_where, sliding_mean
 from .run import RunData
+from .track import RadiusRange, governing_by_radius, split_by_radius
 
 STANDARD = "EN 14363:2016"
 
@@ -52,6 +58,8 @@ DEFAULTS = {
     "percentile_low": 0.15,     # F1
     "percentile_quasi_static": 50.0,   # F0
     "yq_limit": 0.8,            # (Y/Q)lim, R >= 250 m [M]
+    "yq_min_radius_m": 250.0,   # the radius range of (Y/Q)lim: tangent track and R >= this [M]
+    "yq_limit_small_radius": None,   # (Y/Q) limit on smaller radii (None: reported only)
     "alpha": 1.0,               # sum-Y factor: 1 (0.85 freight) [M]
     "q_lim_N": None,
     "y_qst_limit_N": 60e3,      # [M]
@@ -102,15 +110,22 @@ def evaluate(run: RunData, options) -> list[Row]:
     yq = np.where(on, Y / np.where(on, P, 1.0), 0.0)
     rows = []
 
-    _, yq2m = sliding_mean(x, yq, window, step)
-    f2 = np.atleast_1d(percentile(yq2m, hi))
-    i, v, lim = governing(f2, float(options["yq_limit"]), run.wheel_labels)
+    centres, yq2m = sliding_mean(x, yq, window, step)
+    valid = RadiusRange(float(options["yq_min_radius_m"]), inclusive=True)
+    split = split_by_radius(run.wheel_radius_m(centres), yq2m, valid, hi)
+    i, v, lim, where = governing_by_radius(split, float(options["yq_limit"]),
+                                           options["yq_limit_small_radius"], run.wheel_labels,
+                                           valid)
     rows.append(Row(
         "running safety, assessment quantity (Y/Q)2m (flange climbing)", "Y_Q_2m", "1", "wheel",
-        run.wheel_labels[i], v, lim, f"(Y/Q)lim = {lim:g} for R >= 250 m (standards.md) [M]",
+        run.wheel_labels[i], v, lim,
+        f"(Y/Q)lim = {float(options['yq_limit']):g} for R >= {valid.min_radius_m:g} m "
+        "(standards.md) [M]",
+        category="limit" if np.isfinite(lim) else "info",
         raw_index="max_derailment_coefficient", raw_value=run.raw("max_derailment_coefficient"),
         window_m=window, step_m=step, statistic=f"F2 = {hi:g} % percentile",
-        notes="Y/Q in the flange-climbing sense from the filtered forces; " + _SOURCE,
+        notes=("; ".join(filter(None, [where, "Y/Q in the flange-climbing sense from the "
+                                       "filtered forces", _SOURCE]))),
     ).with_filter(filt))
 
     H = filt.apply(run.H_N, run.dt_s)[keep]
@@ -146,28 +161,48 @@ def evaluate(run: RunData, options) -> list[Row]:
         statistic=f"F2 = {hi:g} % percentile", notes=_SOURCE,
     ).with_filter(filt))
 
-    qqst = np.atleast_1d(percentile(P, mid))
+    # quasi-static values: over each wheel's time on curves where the run has any, else the run
+    on_curve, curve_note = _curve_samples(run, x)
+    raw_on_curve, _ = _curve_samples(run, run.x_m)
+    if on_curve is None or raw_on_curve is None:
+        on_curve, raw_on_curve = np.ones(P.shape, bool), np.ones(run.P_N.shape, bool)
+    qqst = percentile_where(P, on_curve, mid)
     i, v, lim = governing(qqst, float(options["q_qst_limit_N"]), run.wheel_labels)
     rows.append(Row(
         "track loading, assessment quantity Q_qst (quasi-static vertical wheel force)",
         "Q_qst_N", "N", "wheel", run.wheel_labels[i], v, lim,
         f"Q_qst,lim = {lim / 1e3:g} kN (assessed in curves; informative on tangent track) [M]",
-        raw_value=float(np.max(percentile(run.P_N, mid))),
+        raw_value=float(np.nanmax(percentile_where(run.P_N, raw_on_curve, mid))),
         statistic=f"F0 = {mid:g} % percentile",
-        notes="raw_value: the same percentile of the unfiltered forces; " + _SOURCE,
+        notes="; ".join(filter(None, [curve_note, "raw_value: the same percentile of the "
+                                      "unfiltered forces", _SOURCE])),
     ).with_filter(filt))
 
-    yqst = np.abs(np.atleast_1d(percentile(Y, mid)))
+    yqst = np.abs(percentile_where(Y, on_curve, mid))
     i, v, lim = governing(yqst, float(options["y_qst_limit_N"]), run.wheel_labels)
     rows.append(Row(
         "track loading, assessment quantity Y_qst (quasi-static lateral wheel force)",
         "Y_qst_N", "N", "wheel", run.wheel_labels[i], v, lim,
         f"Y_qst,lim = {lim / 1e3:g} kN (assessed in curves; informative on tangent track) [M]",
-        raw_value=float(np.max(np.abs(percentile(run.Q_N, mid)))),
+        raw_value=float(np.nanmax(np.abs(percentile_where(run.Q_N, raw_on_curve, mid)))),
         statistic=f"|F0|, F0 = {mid:g} % percentile",
-        notes="raw_value: the same percentile of the unfiltered forces; " + _SOURCE,
+        notes="; ".join(filter(None, [curve_note, "raw_value: the same percentile of the "
+                                      "unfiltered forces", _SOURCE])),
     ).with_filter(filt))
     return rows
+
+
+def _curve_samples(run: RunData, x: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """(n, n_wheels) whether each wheel is on a curve (clothoid or arc) at the lead positions
+    ``x``, and the note saying so; (None, "") where the run has no curve under any wheel."""
+    if not run.has_curves:
+        return None, ""
+    radius = run.wheel_radius_m(x)
+    on_curve = np.isfinite(radius)
+    if not on_curve.any():
+        return None, "no wheel reaches the layout's curves: evaluated over the whole run"
+    return on_curve, (f"evaluated over each wheel's time on curves (R {np.min(radius):.0f} m "
+                      "and above, clothoids included)")
 
 
 PROFILE = Profile("en14363", STANDARD, "running safety and track loading", DEFAULTS, evaluate)

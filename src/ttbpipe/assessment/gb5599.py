@@ -24,10 +24,14 @@ table), without the filter's settling time at either end
 (:meth:`~.processing.Butterworth.interior`); the data are "resampled at 2 m": each 2 m piece of
 the run is represented by its largest value (:func:`~.processing.segment_maxima`, our reading of
 the resampling: a peak is never lost between grid points) [M]; the statistic is the 99.85th
-percentile of the pieces. Car-body accelerations: Butterworth band-pass 0.4-40 Hz (order 4, zero
-phase [M: order]), largest |a| of each 2 m piece, mean + 2.2 sigma of those peaks. Sperling:
-:func:`ttbpipe.vehicle.comfort.sperling_index` (5 s windows, the largest window value [M: the
-standard's statistic over the windows], over the floor points of each car).
+percentile of the pieces. On a layout with curves (:mod:`.track`) the derailment coefficient is
+assessed per wheel over the pieces (by their centre) where the wheel is on tangent track or
+R > 400 m (option ``derailment_min_radius_m``), smaller radii only against a limit given as
+``derailment_limit_small_radius`` (else reported in the row's notes). Car-body accelerations:
+Butterworth band-pass 0.4-40 Hz (order 4, zero phase [M: order]), largest |a| of each 2 m
+piece, mean + 2.2 sigma of those peaks. Sperling: :func:`ttbpipe.vehicle.comfort.sperling_index`
+(5 s windows, the largest window value [M: the standard's statistic over the windows], over the
+floor points of each car).
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ from ..vehicle.comfort import sperling_index
 from .base import Profile, Row, governing
 from .processing import Butterworth, mean_plus_k_sigma, percentile, segment_maxima
 from .run import RunData
+from .track import RadiusRange, governing_by_radius, split_by_radius
 
 log = logging.getLogger(__name__)
 
@@ -57,6 +62,10 @@ DEFAULTS = {
     "filter_order": 4,
     "segment_m": 2.0,               # "resampled at 2 m"
     "percentile": 99.85,
+    # Q/P 0.8 holds on tangent track and R > 400 m [V]; smaller radii against this limit when
+    # given (None: reported in the row's notes only)
+    "derailment_min_radius_m": 400.0,
+    "derailment_limit_small_radius": None,
     "carbody_band_hz": (0.4, 40.0),
     "carbody_k_sigma": 2.2,
     "carbody_limit_m_s2": CARBODY_ACC_LIMIT_M_S2,
@@ -95,14 +104,20 @@ def evaluate(run: RunData, options) -> list[Row]:
     rows = []
 
     qp = np.where(on, np.abs(Q) / np.where(on, P, 1.0), 0.0)
-    value = np.atleast_1d(percentile(segment_maxima(x, qp, seg)[1], pct))
+    starts, pieces = segment_maxima(x, qp, seg)
+    valid = RadiusRange(float(options["derailment_min_radius_m"]), inclusive=False)
+    split = split_by_radius(run.wheel_radius_m(starts + 0.5 * seg), pieces, valid, pct)
     lim_qp = limits["derailment_coefficient"]
-    i, v, lim = governing(value, lim_qp.threshold, run.wheel_labels)
+    i, v, lim, where = governing_by_radius(split, lim_qp.threshold,
+                                           options["derailment_limit_small_radius"],
+                                           run.wheel_labels, valid)
     rows.append(Row(
         "9 (assessment index: derailment coefficient), 10 and Appendix D (data processing)",
         "derailment_coefficient_Q_P", "1", "wheel", run.wheel_labels[i], v, lim, lim_qp.source,
+        category="limit" if np.isfinite(lim) else "info",
         raw_index="max_derailment_coefficient", raw_value=run.raw("max_derailment_coefficient"),
-        window_m=seg, statistic=stat, notes="|Q|/P from the filtered forces, 0 off the rail",
+        window_m=seg, statistic=stat,
+        notes="; ".join(filter(None, [where, "|Q|/P from the filtered forces, 0 off the rail"])),
     ).with_filter(filt))
 
     p0 = run.wheel_static_N

@@ -243,6 +243,18 @@ def percentile(values: np.ndarray, percent: float) -> np.ndarray | float:
     return float(out) if np.ndim(out) == 0 else out
 
 
+def percentile_where(values: np.ndarray, mask: np.ndarray, percent: float) -> np.ndarray:
+    """The ``percent`` percentile of each column of ``values`` (n, k) over its rows where
+    ``mask`` (n, k) holds, NaN for a column where it holds nowhere; :func:`percentile` itself
+    where it holds everywhere."""
+    v = np.asarray(values, dtype=float).reshape(len(values), -1)
+    m = np.asarray(mask, dtype=bool).reshape(v.shape)
+    if m.all():
+        return np.atleast_1d(percentile(v, percent))
+    return np.array([np.percentile(v[m[:, j], j], percent, method="linear") if m[:, j].any()
+                     else np.nan for j in range(v.shape[1])])
+
+
 def mean_plus_k_sigma(values: np.ndarray, k: float) -> np.ndarray | float:
     """mean + k x standard deviation (population, ddof = 0) along axis 0."""
     v = np.asarray(values, dtype=float)

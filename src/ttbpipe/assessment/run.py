@@ -7,7 +7,9 @@ car ``carC_body_{front,centre,rear}_{az,ay}_m_s2`` and the structure monitors by
 (``girder_spanS_mid_z_acc_m_s2``, ...). P is the vertical and Q the lateral force of the rail on
 the wheel (+ left), H = Q_left + Q_right. The summary (the provenance's ``summary``) holds the raw
 indices by their registry names (:mod:`ttbpipe.response_indices`), the train speed
-``speed_kmh`` and the static wheel loads ``static_wheel_load_N`` {wheelset: [left, right]}.
+``speed_kmh``, the static wheel loads ``static_wheel_load_N`` {wheelset: [left, right]} and
+each wheelset's x relative to the leading one, ``wheelset_offset_m`` (needed on curves:
+:mod:`.track`).
 
 :class:`RunData` parses these once: the profiles then index arrays, not column names. The
 column patterns below are the table's documented format; nothing here recomputes the run.
@@ -24,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from .processing import sample_interval
+from .track import TANGENT, has_curves, layout_of, radius_along
 
 SIDES = ("left", "right")
 _BODY = re.compile(r"^car(\d+)_body_(front|centre|rear)_(az|ay)_m_s2$")
@@ -84,6 +87,32 @@ class RunData:
         """(n_wheelsets, 2) static wheel loads P0 = Q0 (left, right) of the static equilibrium."""
         return np.array([self.summary["static_wheel_load_N"][ws] for ws in self.wheelsets],
                         dtype=float)
+
+    @cached_property
+    def has_curves(self) -> bool:
+        """Whether the run's case (``config``) lays the track in curves (``simulation.layout``)."""
+        return has_curves(self.config)
+
+    @cached_property
+    def wheel_offset_m(self) -> np.ndarray:
+        """(n_wheels,) x of each wheel relative to ``x_lead_m`` (the summary's
+        ``wheelset_offset_m``; both wheels of a wheelset alike)."""
+        offsets = self.summary.get("wheelset_offset_m")
+        if not isinstance(offsets, Mapping) or any(ws not in offsets for ws in self.wheelsets):
+            raise ValueError(
+                "the run's case has curves (simulation.layout), but its summary has no "
+                "wheelset_offset_m {wheelset: x offset from x_lead_m} for every wheelset, so "
+                "the track under each wheel is unknown: rerun it with this version of ttbpipe "
+                "simulate, which records the offsets")
+        return np.repeat([float(offsets[ws]) for ws in self.wheelsets], len(SIDES))
+
+    def wheel_radius_m(self, lead_x_m: np.ndarray) -> np.ndarray:
+        """(len(lead_x_m), n_wheels) curve radius under each wheel (``inf`` on tangent track)
+        when the leading wheelset is at ``lead_x_m`` (:func:`.track.radius_along`)."""
+        lead = np.asarray(lead_x_m, dtype=float)
+        if not self.has_curves:
+            return np.full((lead.size, len(self.wheel_labels)), TANGENT)
+        return radius_along(layout_of(self.config), lead[:, None] + self.wheel_offset_m[None, :])
 
     def raw(self, name: str) -> float:
         """A raw index of the summary by its registry name (NaN when the run has none)."""

@@ -186,6 +186,9 @@ def summarise(setup: CoupledSetup, raw, table: pd.DataFrame,
         "dt_limits": setup.dt_limits, "static_iterations": setup.static_iterations,
         "n_spans": setup.n_spans,
         "static_wheel_load_N": {lab: p0[w].tolist() for w, lab in enumerate(labels)},
+        # where each wheelset runs: x = x_lead_m + offset (the assessment's track under a wheel)
+        "wheelset_offset_m": {lab: float(x0 - setup.x_lead0)
+                              for lab, x0 in zip(labels, setup.wheelset_x0)},
         "min_wheel_vertical_force_N": float(raw.train.wheel_peak[:, :, 1].min()),
         "contact": setup.geom.description,
         "irregularity": dict(setup.irregularity_info),
