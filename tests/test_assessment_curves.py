@@ -184,3 +184,21 @@ def test_a_coupled_run_through_a_300_m_curve_is_assessed_by_the_radius_under_eac
     qp = row(assess(table, summary, "gb5599", config=case), "derailment_coefficient_Q_P")
     assert "on R <= 400 m (down to R = 300 m) the largest value is" in qp["notes"]
     assert qp["limit"] == 0.8 and qp["category"] == "limit"
+
+
+def test_a_train_running_towards_minus_x_is_assessed_as_its_mirror_image():
+    """The flange run mirrored about x = 200 m (the train runs -x, its trailing wheelsets at +x
+    offsets, the arc at the mirrored chainage): every processed value, location and note as in
+    the run towards +x (to 1e-12: the window positions differ by a constant shift)."""
+    table, summary = _flange_run()
+    mirrored, mirrored_summary = table.copy(), dict(summary)
+    mirrored["x_lead_m"] = 400.0 - table["x_lead_m"]
+    mirrored_summary["wheelset_offset_m"] = {ws: -off for ws, off in OFFSETS.items()}
+    arc = _layout(start_m=400.0 - ARC[1])
+    for name in ("en14363", "gb5599"):
+        ahead = assess(table, summary, name, config=_case(_layout()))
+        back = assess(mirrored, mirrored_summary, name, config=_case(arc))
+        np.testing.assert_allclose(back["processed_value"], ahead["processed_value"], rtol=1e-12,
+                                   atol=1e-9)
+        assert back["location"].tolist() == ahead["location"].tolist()
+        assert back["notes"].tolist() == ahead["notes"].tolist()

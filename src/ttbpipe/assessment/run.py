@@ -74,12 +74,21 @@ class RunData:
         return float(self.summary["speed_kmh"])
 
     @cached_property
+    def direction(self) -> int:
+        """+1 when the train runs towards +x, -1 towards -x (from ``x_lead_m``; +1 without it)."""
+        if "x_lead_m" not in self.table.columns:
+            return 1
+        x = self.table["x_lead_m"].to_numpy(float)
+        return -1 if x[-1] < x[0] else 1
+
+    @cached_property
     def x_m(self) -> np.ndarray:
-        """Position axis of the histories: the leading wheelset's x (m), from x_lead_m, else V t.
-        Every wheel is at a constant offset from it, so windows along it are windows along the
-        track for every wheel."""
+        """Position axis of the histories: the leading wheelset's chainage along its direction of
+        travel (m; ``direction`` x ``x_lead_m``, increasing for a train running either way), else
+        V t. Every wheel is at a constant offset from it, so windows along it are windows along
+        the track for every wheel."""
         if "x_lead_m" in self.table.columns:
-            return self.table["x_lead_m"].to_numpy(float)
+            return self.direction * self.table["x_lead_m"].to_numpy(float)
         return self.speed_m_s * self.table["time_s"].to_numpy(float)
 
     @cached_property
@@ -106,13 +115,15 @@ class RunData:
                 "simulate, which records the offsets")
         return np.repeat([float(offsets[ws]) for ws in self.wheelsets], len(SIDES))
 
-    def wheel_radius_m(self, lead_x_m: np.ndarray) -> np.ndarray:
-        """(len(lead_x_m), n_wheels) curve radius under each wheel (``inf`` on tangent track)
-        when the leading wheelset is at ``lead_x_m`` (:func:`.track.radius_along`)."""
-        lead = np.asarray(lead_x_m, dtype=float)
+    def wheel_radius_m(self, lead_travel_m: np.ndarray) -> np.ndarray:
+        """(len(lead_travel_m), n_wheels) curve radius under each wheel (``inf`` on tangent
+        track) when the leading wheelset is at ``lead_travel_m`` of :attr:`x_m`
+        (:func:`.track.radius_along` at x = direction x travel + the wheel's offset)."""
+        lead = np.asarray(lead_travel_m, dtype=float)
         if not self.has_curves:
             return np.full((lead.size, len(self.wheel_labels)), TANGENT)
-        return radius_along(layout_of(self.config), lead[:, None] + self.wheel_offset_m[None, :])
+        lead_x = self.direction * lead
+        return radius_along(layout_of(self.config), lead_x[:, None] + self.wheel_offset_m[None, :])
 
     def raw(self, name: str) -> float:
         """A raw index of the summary by its registry name (NaN when the run has none)."""
