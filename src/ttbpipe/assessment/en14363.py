@@ -162,9 +162,12 @@ def evaluate(run: RunData, options) -> list[Row]:
     ).with_filter(filt))
 
     # quasi-static values: over each wheel's time on curves where the run has any, else the run
-    on_curve, curve_note = _curve_samples(run, x)
-    raw_on_curve, _ = _curve_samples(run, run.x_m)
-    if on_curve is None or raw_on_curve is None:
+    raw_on_curve, curve_note = _curve_samples(run)
+    on_curve = None if raw_on_curve is None else raw_on_curve[keep]
+    if on_curve is not None and not on_curve.any():
+        on_curve, curve_note = None, ("no wheel reaches the layout's curves within the assessed "
+                                      "part of the run: evaluated over the whole run")
+    if on_curve is None:
         on_curve, raw_on_curve = np.ones(P.shape, bool), np.ones(run.P_N.shape, bool)
     qqst = percentile_where(P, on_curve, mid)
     i, v, lim = governing(qqst, float(options["q_qst_limit_N"]), run.wheel_labels)
@@ -192,17 +195,15 @@ def evaluate(run: RunData, options) -> list[Row]:
     return rows
 
 
-def _curve_samples(run: RunData, x: np.ndarray) -> tuple[np.ndarray | None, str]:
-    """(n, n_wheels) whether each wheel is on a curve (clothoid or arc) at the lead positions
-    ``x``, and the note saying so; (None, "") where the run has no curve under any wheel."""
+def _curve_samples(run: RunData) -> tuple[np.ndarray | None, str]:
+    """(n, n_wheels) whether each wheel is on a curve (clothoid or arc) at each output step, and
+    the note saying so; (None, "") where the case has no curves."""
     if not run.has_curves:
         return None, ""
-    radius = run.wheel_radius_m(x)
+    radius = run.wheel_radius_m(run.x_m)
     on_curve = np.isfinite(radius)
-    if not on_curve.any():
-        return None, "no wheel reaches the layout's curves: evaluated over the whole run"
-    return on_curve, (f"evaluated over each wheel's time on curves (R {np.min(radius):.0f} m "
-                      "and above, clothoids included)")
+    smallest = f"R {np.min(radius):.0f} m and above, " if on_curve.any() else ""
+    return on_curve, f"evaluated over each wheel's time on curves ({smallest}clothoids included)"
 
 
 PROFILE = Profile("en14363", STANDARD, "running safety and track loading", DEFAULTS, evaluate)

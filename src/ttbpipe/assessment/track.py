@@ -26,6 +26,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .base import governing
+from .processing import percentile_where
+
 TANGENT = math.inf
 
 
@@ -88,13 +91,10 @@ def split_by_radius(radius_m: np.ndarray, values: np.ndarray, radius_range: Radi
                     percent: float) -> RadiusSplit:
     """The ``percent`` percentile of ``values`` (n, n_wheels) per wheel where the wheel's radius
     ``radius_m`` (n, n_wheels) is in ``radius_range`` and where it is not."""
-    from .processing import percentile_where
-
     inside = radius_range.contains(radius_m)
-    outside_values = (percentile_where(values, ~inside, percent) if (~inside).any()
-                      else np.full(inside.shape[1], np.nan))
     smallest = float(np.min(radius_m[~inside])) if (~inside).any() else TANGENT
-    return RadiusSplit(percentile_where(values, inside, percent), outside_values, smallest)
+    return RadiusSplit(percentile_where(values, inside, percent),
+                       percentile_where(values, ~inside, percent), smallest)
 
 
 def governing_by_radius(split: RadiusSplit, limit: np.ndarray | float,
@@ -104,8 +104,6 @@ def governing_by_radius(split: RadiusSplit, limit: np.ndarray | float,
     range against ``limit``; outside against ``small_radius_limit`` when one is given, else not
     assessed (the note gives the largest value there). A run with no part inside the range and
     no ``small_radius_limit`` gives its largest value outside with a NaN limit."""
-    from .base import governing
-
     n = len(labels)
     limits_inside = np.broadcast_to(np.asarray(limit, dtype=float), (n,))
     outside = (f"{radius_range.describe_outside()} (down to R = "
