@@ -243,14 +243,15 @@ def _nominal_structure(config: Mapping[str, Any], layout: Any):
     configuration alone and is not changed after assembly, so a shared model gives the results
     of a fresh one bit for bit (tests/test_structure_reuse.py)."""
     from ..structure import build_structure
-    from ..vehicle.curving import cant_knots
+    from ..vehicle.curving import cant_knots, plan_knots
 
     try:
         key = json.dumps([config, layout], sort_keys=True, allow_nan=False)
     except (TypeError, ValueError):   # not plain configuration data: build, do not keep
-        return build_structure(config, cant=cant_knots(layout))
+        return build_structure(config, cant=cant_knots(layout), plan=plan_knots(layout))
     if key not in _NOMINAL_STRUCTURES:
-        structure = build_structure(copy.deepcopy(dict(config)), cant=cant_knots(layout))
+        structure = build_structure(copy.deepcopy(dict(config)), cant=cant_knots(layout),
+                                    plan=plan_knots(layout))
         while len(_NOMINAL_STRUCTURES) >= _NOMINAL_STRUCTURES_KEPT:
             _NOMINAL_STRUCTURES.pop(next(iter(_NOMINAL_STRUCTURES)))
         _NOMINAL_STRUCTURES[key] = structure

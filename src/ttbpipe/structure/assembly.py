@@ -28,6 +28,7 @@ from .girder import SpanReduction, hermite_shape, reduce_span
 from .kernels import StructurePacked
 from .layout import Layout, make_layout
 from .pier import PierReduction, pier_from_config
+from .plan import PLACEMENTS, plan_eccentricity_m, span_is_curved
 from .links import LinkAccumulator
 from .matrices import assemble_matrices, ballast_link_rows, pad_link_rows
 
@@ -58,6 +59,7 @@ class StructureModel:
     triple_kinds: list = field(default_factory=list)   # "ca" per triple (pads: pad_*, ballast: bal_*)
     piers: list = field(default_factory=list)   # PierReduction per pier of a given height
     cant: tuple | None = None        # (x knots m, cant angle knots rad) of the track on the deck
+    plan: tuple | None = None        # (x knots m, curvature knots 1/m) of the track in plan
     slab_element_track: np.ndarray | None = None   # track of each slab element (None: all 0)
     # what is derived from the model alone (global matrices, stability analysis, static
     # factorisation), computed on first use: a model is not changed after assembly
@@ -105,7 +107,8 @@ class StructureModel:
 
 def build_structure(config: Mapping[str, Any] | None = None,
                     factors: Mapping[str, np.ndarray] | None = None,
-                    cant: tuple[np.ndarray, np.ndarray] | None = None) -> StructureModel:
+                    cant: tuple[np.ndarray, np.ndarray] | None = None,
+                    plan: tuple[np.ndarray, np.ndarray] | None = None) -> StructureModel:
     """Build the structure from a ``structure:`` config section (defaults fill missing keys).
 
     ``cant``: the track's cant angle along x as knots (x m, angle rad; + = left rail up),
@@ -113,6 +116,11 @@ def build_structure(config: Mapping[str, Any] | None = None,
     track (rails, pads, slab) is then modelled in the canted track plane and the CA mortar joins
     it to the level girder through the rotation of the deck's motion into that plane (docstring
     of :func:`_ca_deck_rows`); None or all zero: level track.
+    ``plan``: the track's curvature along x as knots (x m, curvature 1/m; + = to the left),
+    piecewise linear (:func:`ttbpipe.vehicle.curving.plan_knots`): on the spans it reaches the
+    track's centre line runs off the straight girders' axes by the curve's offset from each
+    span's chord (:mod:`ttbpipe.structure.plan`, ``girder.placement_on_curves``); None or all
+    zero: tangent track.
     """
     cfg = P.resolve(config)
     layout = make_layout(cfg)
@@ -122,7 +130,10 @@ def build_structure(config: Mapping[str, Any] | None = None,
     if cant is not None:
         xk, tk = (np.asarray(a, dtype=float) for a in cant)
         cant = None if not np.any(tk != 0.0) else (xk, tk)
-    return _assemble(cfg, layout, props, cant)
+    if plan is not None:
+        xk, kk = (np.asarray(a, dtype=float) for a in plan)
+        plan = None if not np.any(kk != 0.0) else (xk, kk)
+    return _assemble(cfg, layout, props, cant, plan)
 
 
 def apply_factors(model_or_properties, factors: Mapping[str, np.ndarray]):
@@ -135,7 +146,7 @@ def apply_factors(model_or_properties, factors: Mapping[str, np.ndarray]):
     """
     if isinstance(model_or_properties, StructureModel):
         m = model_or_properties
-        return _assemble(m.config, m.layout, factored(m.properties, factors), m.cant)
+        return _assemble(m.config, m.layout, factored(m.properties, factors), m.cant, m.plan)
     return factored(model_or_properties, factors)
 
 
@@ -163,9 +174,10 @@ def _ca_deck_rows(rz: np.ndarray, ry: np.ndarray, rr: np.ndarray, e_track: float
 
 
 def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
-              cant: tuple[np.ndarray, np.ndarray] | None = None) -> StructureModel:
+              cant: tuple[np.ndarray, np.ndarray] | None = None,
+              plan: tuple[np.ndarray, np.ndarray] | None = None) -> StructureModel:
     """DOF numbering, lumped masses, beams, links and span blocks -> StructureModel
-    (``cant``: as :func:`build_structure`)."""
+    (``cant``, ``plan``: as :func:`build_structure`)."""
     cfg = copy.deepcopy(cfg)
     lay = cfg["layout"]
     rail_c, fas, slab_c, g_c = cfg["rail"], cfg["fastener"], cfg["slab"], cfg["girder"]
@@ -375,6 +387,11 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         bal_next = np.tile(next_one, n_tracks)
         # CA mortar (bridge) or foundation (slab on subgrade), per slab element
         b2 = float(slab_c["width_m"]) ** 2 / 12.0
+        placement = str(g_c["placement_on_curves"])
+        if placement not in PLACEMENTS:
+            raise ValueError(f"structure.girder.placement_on_curves {placement!r}; expected one "
+                             f"of {', '.join(PLACEMENTS)}")
+        curved_span = [span_is_curved(plan, red.start_m, red.length_m) for red in spans]
         h_deck = float(g_c["deck_height_m"])
         sub = cfg["slab_on_subgrade"]
         for j, (xa, xb, da, db, zone, t) in enumerate(slab_elems):
@@ -405,9 +422,14 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
                     s, rz, ry, rr = g
                     o = span_dof0[s]
                     idx = list(range(o, o + spans[s].n))
-                    # the deck under the track's centre line (paper eq. 24), in the track plane
+                    # the deck under the track's centre line (paper eq. 24), in the track
+                    # plane; on a curve the centre line runs off the straight girder's axis
                     theta = 0.0 if cant is None else float(np.interp(x, cant[0], cant[1]))
-                    deck_z, deck_y = _ca_deck_rows(rz, ry, rr, e_track, h_deck, theta)
+                    e_here = e_track
+                    if curved_span[s]:
+                        e_here = e_track + float(plan_eccentricity_m(
+                            plan, spans[s].start_m, spans[s].length_m, x, placement))
+                    deck_z, deck_y = _ca_deck_rows(rz, ry, rr, e_here, h_deck, theta)
                     zd, zc = zd + idx, zc + list(-deck_z)
                     yd, yc = yd + idx, yc + list(-deck_y)
                     rdofs, rc = rdofs + idx, rc + list(-rr)
@@ -497,6 +519,6 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
                           spans=spans, piers=piers, dof_info=info, slab_elements=slab_x,
                           slab_element_node0=node_a, fixed=fixed,
                           link_kinds=[links.kind[i] for i in links.order],
-                          triple_kinds=list(links.tri_kind), cant=cant,
+                          triple_kinds=list(links.tri_kind), cant=cant, plan=plan,
                           slab_element_track=np.array([e[5] for e in slab_elems],
                                                       dtype=np.int64))

@@ -224,7 +224,9 @@ def default_monitors(model) -> list[dict]:
     """At every span's midspan: the left rail, the slab, the girder's shear centre and the deck
     surface under each rail, at the track's offset ``girder.track_offset_m`` (vertical under
     both, lateral under the left: the deck surface's lateral motion is the same under both)
-    and, with ``girder.deck_width_m``, at both deck edges (vertical); every pier.
+    and, with ``girder.deck_width_m``, at both deck edges (vertical); every pier. On a span
+    under a curve the deck monitors under the rails follow the track's centre line at mid-span
+    (its offset from the straight girder's axis, :func:`_mid_span_plan_offset`).
 
     On a double-track deck the rail, slab and deck monitors are per track, named with the
     1-based track: ``rail_track1_left_span1_mid`` (both rails of every track),
@@ -239,6 +241,7 @@ def default_monitors(model) -> list[dict]:
     deck_width = model.config["girder"].get("deck_width_m")
     for s, red in enumerate(model.spans):
         x = red.start_m + 0.5 * red.length_m
+        e_mid = track + _mid_span_plan_offset(model, red)
         if model.packed.n_rails:
             out.append({"name": f"rail_left_span{s + 1}_mid", "kind": "rail", "rail": 0,
                         "x_m": x, "directions": ["z", "y"]})
@@ -248,8 +251,8 @@ def default_monitors(model) -> list[dict]:
                         "directions": ["z", "y"]})
         out.append({"name": f"girder_span{s + 1}_mid", "kind": "girder", "span": s,
                     "position": 0.5, "directions": ["z", "y"]})
-        for side, e, directions in (("left", track + half_gauge, ["z", "y"]),
-                                    ("right", track - half_gauge, ["z"])):
+        for side, e, directions in (("left", e_mid + half_gauge, ["z", "y"]),
+                                    ("right", e_mid - half_gauge, ["z"])):
             out.append({"name": deck_monitor_name(side, s + 1), "kind": "girder", "span": s,
                         "position": 0.5, "deck_surface": True, "lateral_offset_m": e,
                         "directions": directions})
@@ -260,6 +263,16 @@ def default_monitors(model) -> list[dict]:
                             "lateral_offset_m": e, "directions": ["z"]})
     out += _pier_monitors(model)
     return out
+
+
+def _mid_span_plan_offset(model, red) -> float:
+    """Offset (m, + left) of a track's centre line from the straight girder's axis at the
+    span's mid-point under a curve in plan (:mod:`ttbpipe.structure.plan`); 0.0 off curves."""
+    from .plan import plan_eccentricity_m
+
+    return float(plan_eccentricity_m(model.plan, red.start_m, red.length_m,
+                                     red.start_m + 0.5 * red.length_m,
+                                     model.config["girder"]["placement_on_curves"]))
 
 
 def _pier_monitors(model) -> list[dict]:
@@ -277,7 +290,9 @@ def _double_track_monitors(model) -> list[dict]:
         x = red.start_m + 0.5 * red.length_m
         out.append({"name": f"girder_span{s + 1}_mid", "kind": "girder", "span": s,
                     "position": 0.5, "directions": ["z", "y"]})
+        e_plan = _mid_span_plan_offset(model, red)
         for t, e_track in enumerate(model.layout.track_offsets_m):
+            e_track = e_track + e_plan
             tag = f"track{t + 1}"
             for side, rail in (("left", 2 * t), ("right", 2 * t + 1)):
                 if model.packed.n_rails:

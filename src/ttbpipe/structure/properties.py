@@ -98,6 +98,10 @@ GIRDER = {
     "track_offsets_m": None,
     # deck width (m): with a value, default monitors also at both deck edges (null: none)
     "deck_width_m": None,
+    # where the straight girder's axis lies under a track curved in plan (simulation.layout):
+    # split_versine (moved outwards by half the mid-span offset from the chord) | chord
+    # (ttbpipe.structure.plan)
+    "placement_on_curves": "split_versine",
 }
 
 #: Bearings: two per girder end at +- lateral_spacing/2. [V: k, c physics.md section 6]

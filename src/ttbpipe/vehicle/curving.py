@@ -33,10 +33,16 @@ them into the level girder through the cant's rotation (:func:`cant_knots`,
 train's weight downwards and its centrifugal force outwards. The ground under the approaches is
 rigid, so the track's springs to it need no rotation.
 
+The girders are straight from bearing to bearing while the track follows the curve, so on a
+curve the track's centre line runs off the girder's axis by the curve's offset from the span's
+chord (:func:`plan_knots`, ``ttbpipe.structure.plan``): the eccentricity of the CA mortar's
+load on the girder varies along each span (seed paper eq. 24's B_r - b_s/2 at every point).
+
 Not modelled: the frame's roll acceleration V^2 d^2theta/dx^2 (zero on linear cant ramps
-except at their ends), vertical curves, the structure's curvature in plan (the girder and rails
-stay straight; on bridges with R >> span the track-frame loads are what matters), and the
-gyroscopic coupling of the wheelsets' own yaw and roll rates on tangent track.
+except at their ends), vertical curves, the track's curvature in plan in the rails' and slab's
+own bending (they are modelled straight along the developed chainage; on R >> span the
+track-frame loads are what matters), and the gyroscopic coupling of the wheelsets' own yaw and
+roll rates on tangent track.
 
 Configuration (``simulation.layout``)::
 
@@ -121,6 +127,27 @@ def cant_knots(layout: Mapping[str, Any] | None) -> tuple[np.ndarray, np.ndarray
     (:func:`ttbpipe.structure.build_structure`'s ``cant``); None when the layout has no cant."""
     xs, _, ts = layout_knots(layout)
     return (xs, ts) if np.any(ts != 0.0) else None
+
+
+def plan_knots(layout: Mapping[str, Any] | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """(chainage, curvature) knots of a ``simulation.layout`` section for the structure
+    (:func:`ttbpipe.structure.build_structure`'s ``plan``: the track curved in plan on straight
+    spans); None when the layout has no curvature."""
+    xs, ks, _ = layout_knots(layout)
+    return (xs, ks) if np.any(ks != 0.0) else None
+
+
+def centreline_offset(xs: np.ndarray, ks: np.ndarray, x) -> np.ndarray:
+    """Lateral offset (m, + left) of the track's centre line at chainage ``x`` from the tangent
+    at the first knot, for the piecewise-linear curvature ``ks`` at the knots ``xs``: the
+    curvature integrated twice, exactly (a cubic in x between knots; small-angle geometry, as
+    the track frame of the loop)."""
+    heading, offset = _integrate_knots(xs, ks)
+    x = np.asarray(x, dtype=float)
+    i = np.clip(np.searchsorted(xs, x, side="right") - 1, 0, xs.size - 2)
+    s = x - xs[i]
+    dk = (ks[i + 1] - ks[i]) / (xs[i + 1] - xs[i])
+    return offset[i] + heading[i] * s + 0.5 * ks[i] * s * s + dk * s ** 3 / 6.0
 
 
 def _integrate_knots(xs: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
