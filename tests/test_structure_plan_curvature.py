@@ -148,3 +148,26 @@ def test_deck_monitors_under_the_rails_follow_the_curved_track(tracks):
     assert curved.keys() == level.keys()
     for name, e in level.items():
         assert curved[name] == pytest.approx(e - versine, abs=1e-12), name   # left curve: right
+
+
+def test_monitors_added_for_the_assessment_sit_on_the_curved_track():
+    """The deck monitors a case gets for the EN 1990 deck checks come from the structure on the
+    case's own layout, as the run's structure does (not from a straight one)."""
+    from ttbpipe.assessment.monitors import case_with_deck_monitors
+
+    case = {"structure": _config("chord"), "simulation": {"layout": _arc()}}
+    monitors = {m["name"]: m for m in case_with_deck_monitors(case)["monitors"]}
+    straight = {m["name"]: m for m in case_with_deck_monitors(
+        {"structure": _config("chord")})["monitors"]}
+    versine = SPAN_M ** 2 / (8 * RADIUS_M)
+    deck = [name for name, m in straight.items() if m.get("deck_surface")]
+    assert deck
+    # the studies' path: the monitors the EN 1990 profile adds to every sample's case
+    from ttbpipe.assessment.study import run_case
+
+    en1990 = {"standard": ["en1990"], "options": {"en1990": {"twist": True}}}
+    in_study = {m["name"]: m for m in run_case(case, en1990)["monitors"]}
+    for name in deck:
+        assert monitors[name]["lateral_offset_m"] == pytest.approx(
+            straight[name]["lateral_offset_m"] - versine, abs=1e-12), name
+        assert in_study[name]["lateral_offset_m"] == monitors[name]["lateral_offset_m"], name

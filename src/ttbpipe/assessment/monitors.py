@@ -71,11 +71,11 @@ def deck_check_monitors(structure) -> list[dict[str, Any]]:
 def case_with_deck_monitors(case: Mapping[str, Any]) -> dict[str, Any]:
     """A copy of ``case`` whose monitors are its own (or the structure's default ones) followed by
     :func:`deck_check_monitors` of its structure."""
-    from ..structure import build_structure
+    from ..simulation.setup import nominal_structure
     from ..structure.monitors import default_monitors
 
     out = copy.deepcopy(dict(case))
-    structure = build_structure(out.get("structure") or {})
+    structure = nominal_structure(out)   # on the case's layout: curves move the deck monitors
     base = list(out.get("monitors") or default_monitors(structure))
     names = {m.get("name") for m in base}
     extra = [m for m in deck_check_monitors(structure) if m["name"] not in names]

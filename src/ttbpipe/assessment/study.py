@@ -78,12 +78,12 @@ def needs_twist_monitors(assessment: Mapping[str, Any]) -> bool:
 
 
 @functools.lru_cache(maxsize=4)
-def _twist_monitors(structure_json: str) -> tuple[str, ...]:
-    from ..structure import build_structure
+def _twist_monitors(case_json: str) -> tuple[str, ...]:
+    from ..simulation.setup import nominal_structure
     from ..structure.monitors import default_monitors
     from .monitors import deck_check_monitors
 
-    model = build_structure(json.loads(structure_json))
+    model = nominal_structure(json.loads(case_json))
     return tuple(json.dumps(m) for m in [*default_monitors(model), *deck_check_monitors(model)])
 
 
@@ -92,8 +92,11 @@ def run_case(case: Mapping[str, Any], assessment: Mapping[str, Any]) -> dict[str
     if not needs_twist_monitors(assessment) or case.get("monitors"):
         return dict(case)
     out = copy.deepcopy(dict(case))
-    structure = json.dumps(out.get("structure") or {}, sort_keys=True, default=str)
-    out["monitors"] = [json.loads(m) for m in _twist_monitors(structure)]
+    # the structure on the case's layout (a curve moves the deck monitors with the track)
+    where = {"structure": out.get("structure") or {},
+             "simulation": {"layout": (out.get("simulation") or {}).get("layout")}}
+    out["monitors"] = [json.loads(m) for m in
+                       _twist_monitors(json.dumps(where, sort_keys=True, default=str))]
     return out
 
 

@@ -258,12 +258,20 @@ def _nominal_structure(config: Mapping[str, Any], layout: Any):
     return _NOMINAL_STRUCTURES[key]
 
 
+def nominal_structure(case: Mapping[str, Any]):
+    """The structure a case runs on before random properties: its ``structure:`` section on
+    its ``simulation.layout`` (the cant and the curvature in plan of its curves), shared within
+    a process (:func:`_nominal_structure`). Monitors placed from it (the deck under a curved
+    track) sit where the run's structure has them."""
+    layout = (case.get("simulation") or {}).get("layout")
+    return _nominal_structure(case.get("structure") or {}, layout)
+
+
 def _structure(case: Mapping[str, Any], factors: Mapping[str, np.ndarray] | None):
     from ..structure import apply_factors
     from ..structure.random_properties import property_factors
 
-    layout = (case.get("simulation") or {}).get("layout")
-    structure = _nominal_structure(case.get("structure") or {}, layout)
+    structure = nominal_structure(case)
     if factors is None:
         factors = property_factors(case.get("properties"), structure)
     if factors:

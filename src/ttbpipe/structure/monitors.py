@@ -19,6 +19,7 @@ from numba import njit
 
 from .rail_mesh import NODE_DOFS, rail_mesh
 from .girder import span_slope_row
+from .plan import plan_eccentricity_m
 from .shape_functions import hermite_shape
 
 QUANTITIES = {"displacement": 0, "velocity": 1, "acceleration": 2}
@@ -268,8 +269,6 @@ def default_monitors(model) -> list[dict]:
 def _mid_span_plan_offset(model, red) -> float:
     """Offset (m, + left) of a track's centre line from the straight girder's axis at the
     span's mid-point under a curve in plan (:mod:`ttbpipe.structure.plan`); 0.0 off curves."""
-    from .plan import plan_eccentricity_m
-
     return float(plan_eccentricity_m(model.plan, red.start_m, red.length_m,
                                      red.start_m + 0.5 * red.length_m,
                                      model.config["girder"]["placement_on_curves"]))
