@@ -118,7 +118,9 @@ def mc_profile(population: Mapping[str, Any], study_seed: int, section: int,
 def _field_sampler(fields_json: str, structure_json: str, study_seed: int, condition: str):
     """FieldSampler of one randomness condition on the structure's carriers (cached per process:
     the KL bases and Nataf solves are computed once per batch/worker, not per sample)."""
-    from ..fields.sampling import FieldSampler, positions_from_structure
+    from ..fields.sampling import FieldSampler
+    from ..simulation.setup import nominal_structure
+    from ..structure import carrier_positions
 
     fields = json.loads(fields_json)
     if condition != "all":
@@ -127,7 +129,10 @@ def _field_sampler(fields_json: str, structure_json: str, study_seed: int, condi
             raise ValueError(f"fields.groups has no group {condition} (randomness condition of "
                              "study.scenarios.fields.conditions)")
         fields["groups"] = {name: {**g, "enabled": name == condition} for name, g in groups.items()}
-    positions = positions_from_structure(json.loads(structure_json))
+    # the carriers of the process's shared model of this structure (the runs' model: built
+    # once per process; fields.sampling.positions_from_structure gives the same positions)
+    model = nominal_structure({"structure": json.loads(structure_json)})
+    positions = {k: np.asarray(v, dtype=float) for k, v in carrier_positions(model).items()}
     return FieldSampler(fields, study_seed, positions=positions)
 
 
