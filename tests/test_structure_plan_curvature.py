@@ -171,3 +171,21 @@ def test_monitors_added_for_the_assessment_sit_on_the_curved_track():
         assert monitors[name]["lateral_offset_m"] == pytest.approx(
             straight[name]["lateral_offset_m"] - versine, abs=1e-12), name
         assert in_study[name]["lateral_offset_m"] == monitors[name]["lateral_offset_m"], name
+
+
+def test_a_rail_off_the_deck_is_refused_with_its_track_span_and_remedy():
+    """With girder.deck_width_m every rail must lie on the deck; a curve's offset from the
+    straight girder counts (a 32 m span on R = 100 m bows 1.28 m off its chord; the rails are
+    0.7525 m either side of the track's centre line, fastener.rail_centre_distance_m 1.505)."""
+    cfg = _config("chord")
+    cfg["girder"]["deck_width_m"] = 3.0
+    build_structure(cfg, plan=plan_knots(_arc()))     # 0.128 + 0.7525 m < 1.5 m: on the deck
+    tight = {"curves": [{"start_x_m": -10.0, "transition_m": 0.0, "length_m": 100.0,
+                         "radius_m": 100.0}]}
+    with pytest.raises(ValueError, match=r"track 1 on span 1: a rail lies 2\.03\d m .*1\.280 m "
+                                         r"from the curve in plan.*split_versine"):
+        build_structure(cfg, plan=plan_knots(tight))
+    cfg["girder"]["track_offset_m"] = 1.0             # 1.0 + 0.7525 > 1.5: off the deck
+    with pytest.raises(ValueError, match=r"track 1 on span 1: a rail lies 1\.75\d m from the "
+                                         r"girder's axis, beyond"):
+        build_structure(cfg)

@@ -173,6 +173,32 @@ def _ca_deck_rows(rz: np.ndarray, ry: np.ndarray, rr: np.ndarray, e_track: float
     return c * z - s * y, c * y + s * z
 
 
+def _check_rails_on_deck(girder: Mapping[str, Any], layout: Layout, spans: list,
+                         plan: tuple | None, placement: str, half_gauge: float) -> None:
+    """With ``girder.deck_width_m``, every rail must lie on the deck: the track offsets plus,
+    on a span under a curve, the track's offset from the straight girder's axis
+    (:mod:`ttbpipe.structure.plan`, at 33 points of the span). Raises ValueError naming the
+    track and the span, with the remedies."""
+    width = girder.get("deck_width_m")
+    if width is None:
+        return
+    for s, red in enumerate(spans):
+        x = red.start_m + np.linspace(0.0, red.length_m, 33)
+        plan_m = plan_eccentricity_m(plan, red.start_m, red.length_m, x, placement)
+        for t, e_track in enumerate(layout.track_offsets_m):
+            reach = float(np.max(np.abs(e_track + plan_m))) + half_gauge
+            if reach > 0.5 * float(width):
+                curve = (f", of which up to {float(np.max(np.abs(plan_m))):.3f} m from the curve "
+                         "in plan (girder.placement_on_curves, simulation.layout)"
+                         if np.any(plan_m != 0.0) else "")
+                raise ValueError(
+                    f"track {t + 1} on span {s + 1}: a rail lies {reach:.3f} m from the girder's "
+                    f"axis{curve}, beyond the deck's half width {0.5 * float(width):.3f} m "
+                    "(structure.girder.deck_width_m); check girder.track_offset(s)_m and the "
+                    "deck width, or on a curve a larger radius or placement_on_curves: "
+                    "split_versine")
+
+
 def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
               cant: tuple[np.ndarray, np.ndarray] | None = None,
               plan: tuple[np.ndarray, np.ndarray] | None = None) -> StructureModel:
@@ -392,6 +418,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
             raise ValueError(f"structure.girder.placement_on_curves {placement!r}; expected one "
                              f"of {', '.join(PLACEMENTS)}")
         curved_span = [span_is_curved(plan, red.start_m, red.length_m) for red in spans]
+        _check_rails_on_deck(g_c, layout, spans, plan, placement, half_gauge)
         h_deck = float(g_c["deck_height_m"])
         sub = cfg["slab_on_subgrade"]
         for j, (xa, xb, da, db, zone, t) in enumerate(slab_elems):
