@@ -8,7 +8,7 @@ On a circular arc of radius R this is the parabola ``-x' (L - x') / (2 R)`` (x' 
 start; + left, a left-hand curve bows to the right of its chord), whose largest value is the
 versine ``f = L^2 / (8 R)``: 3.2 cm for a 32 m span on R = 4000 m, 13 cm on R = 1000 m.
 
-Where the girder's axis lies on the chord is ``girder.placement_on_curves``:
+Where the girder's axis lies relative to the chord is ``girder.placement_on_curves``:
 
 * ``split_versine`` (default): the axis is moved towards the outside of the curve by half the
   mid-span offset, so that the track runs f/2 inside the axis over the bearings and f/2 outside
