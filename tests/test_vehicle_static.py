@@ -18,9 +18,9 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_shipped_case_files_pass_the_case_schema():
     """The reference case and the vehicle validation cases are valid `ttbpipe simulate` inputs
     (the case JSON schema) and have a train: section (dispatch to run_coupled)."""
-    paths = [ROOT / "config" / "reference_case.yaml",
+    paths = [ROOT / "config" / "reference_case.yaml", ROOT / "config" / "curved_bridge.yaml",
              *sorted((ROOT / "config" / "validation").glob("vehicle_*.yaml"))]
-    assert len(paths) >= 4
+    assert len(paths) >= 5
     for path in paths:
         assert "train" in load_case(path), path
 
