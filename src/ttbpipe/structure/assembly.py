@@ -173,6 +173,28 @@ def _ca_deck_rows(rz: np.ndarray, ry: np.ndarray, rr: np.ndarray, e_track: float
     return c * z - s * y, c * y + s * z
 
 
+def _plan_offsets_at_ca_points(slab_elems: list, spans: list, curved_span: list,
+                               plan: tuple | None, placement: str) -> np.ndarray:
+    """(n_elements, 3) offset of the track's centre line from the straight girder's axis at the
+    CA quadrature points of the bridge's slab elements (:mod:`ttbpipe.structure.plan`), one
+    vectorised evaluation per curved span; a point on the common end of two spans belongs to
+    the first, as in the assembly's ``span_rows``. Zero elsewhere."""
+    out = np.zeros((len(slab_elems), len(GAUSS3)))
+    if not any(curved_span):
+        return out
+    xa = np.array([e[0] for e in slab_elems])
+    xb = np.array([e[1] for e in slab_elems])
+    bridge = np.array([e[4] == "bridge" for e in slab_elems])[:, None]
+    x = xa[:, None] + np.array([g[0] for g in GAUSS3])[None, :] * (xb - xa)[:, None]
+    taken = ~np.broadcast_to(bridge, x.shape).copy()
+    for s, red in enumerate(spans):
+        here = ~taken & (red.start_m - 1e-9 <= x) & (x <= red.start_m + red.length_m + 1e-9)
+        taken |= here
+        if curved_span[s] and here.any():
+            out[here] = plan_eccentricity_m(plan, red.start_m, red.length_m, x[here], placement)
+    return out
+
+
 def _check_rails_on_deck(girder: Mapping[str, Any], layout: Layout, spans: list,
                          plan: tuple | None, placement: str, half_gauge: float) -> None:
     """With ``girder.deck_width_m``, every rail must lie on the deck: the track offsets plus,
@@ -419,6 +441,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
                              f"of {', '.join(PLACEMENTS)}")
         curved_span = [span_is_curved(plan, red.start_m, red.length_m) for red in spans]
         _check_rails_on_deck(g_c, layout, spans, plan, placement, half_gauge)
+        plan_offset = _plan_offsets_at_ca_points(slab_elems, spans, curved_span, plan, placement)
         h_deck = float(g_c["deck_height_m"])
         sub = cfg["slab_on_subgrade"]
         for j, (xa, xb, da, db, zone, t) in enumerate(slab_elems):
@@ -435,7 +458,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
             # consistent distributed foundation: 3-point Gauss quadrature of k N^T N over the
             # element (slab Hermite/linear shape functions, girder basis at each point)
             Ls = xb - xa
-            for xi_g, w_g in GAUSS3:
+            for g_index, (xi_g, w_g) in enumerate(GAUSS3):
                 x = xa + xi_g * Ls
                 w = w_g * Ls
                 N = hermite_shape(xi_g, Ls)
@@ -454,8 +477,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
                     theta = 0.0 if cant is None else float(np.interp(x, cant[0], cant[1]))
                     e_here = e_track
                     if curved_span[s]:
-                        e_here = e_track + float(plan_eccentricity_m(
-                            plan, spans[s].start_m, spans[s].length_m, x, placement))
+                        e_here = e_track + float(plan_offset[j, g_index])
                     deck_z, deck_y = _ca_deck_rows(rz, ry, rr, e_here, h_deck, theta)
                     zd, zc = zd + idx, zc + list(-deck_z)
                     yd, yc = yd + idx, yc + list(-deck_y)

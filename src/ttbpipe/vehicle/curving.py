@@ -144,10 +144,18 @@ def centreline_offset(xs: np.ndarray, ks: np.ndarray, x) -> np.ndarray:
     the track frame of the loop)."""
     heading, offset = _integrate_knots(xs, ks)
     x = np.asarray(x, dtype=float)
-    i = np.clip(np.searchsorted(xs, x, side="right") - 1, 0, xs.size - 2)
-    s = x - xs[i]
-    dk = (ks[i + 1] - ks[i]) / (xs[i + 1] - xs[i])
-    return offset[i] + heading[i] * s + 0.5 * ks[i] * s * s + dk * s ** 3 / 6.0
+    return _centreline_offsets(xs, ks, heading, offset, x.ravel()).reshape(x.shape)
+
+
+@njit(cache=True)
+def _centreline_offsets(xk, kappa, heading, offset, x):
+    """:func:`centreline_offset` at each of the points ``x`` (1-D), by the loop's own
+    :func:`_pose_on_segment`."""
+    out = np.empty(x.shape[0])
+    for j in range(x.shape[0]):
+        i = _knot_segment(xk, x[j])
+        out[j] = _pose_on_segment(xk, kappa, heading, offset, i, x[j])[1]
+    return out
 
 
 def _integrate_knots(xs: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -227,11 +235,9 @@ def no_curve(model) -> CurveArrays:
 
 
 @njit(cache=True)
-def _frame_at(curve, x):
-    """(curvature, its x-derivative, cant angle, its x-derivative, heading, lateral offset) of
-    the track frame at chainage x (linear interpolation; heading and offset integrated
-    exactly)."""
-    xk = curve.knot_x
+def _knot_segment(xk, x):
+    """Index i of the knot interval [xk[i], xk[i+1]) holding x (the first or last interval
+    beyond the knots)."""
     lo = 0
     hi = xk.shape[0] - 1
     while hi - lo > 1:
@@ -240,16 +246,33 @@ def _frame_at(curve, x):
             lo = mid
         else:
             hi = mid
-    i = lo
+    return lo
+
+
+@njit(cache=True)
+def _pose_on_segment(xk, kappa, heading, offset, i, x):
+    """(heading, lateral offset) of the centre line at x in knot interval i: the
+    piecewise-linear curvature integrated exactly from the knots' heading and offset."""
+    s = x - xk[i]
+    dk = (kappa[i + 1] - kappa[i]) / (xk[i + 1] - xk[i])
+    return (heading[i] + kappa[i] * s + 0.5 * dk * s * s,
+            offset[i] + heading[i] * s + 0.5 * kappa[i] * s * s + dk * s * s * s / 6.0)
+
+
+@njit(cache=True)
+def _frame_at(curve, x):
+    """(curvature, its x-derivative, cant angle, its x-derivative, heading, lateral offset) of
+    the track frame at chainage x (linear interpolation; heading and offset integrated
+    exactly)."""
+    xk = curve.knot_x
+    i = _knot_segment(xk, x)
     seg = xk[i + 1] - xk[i]
     s = x - xk[i]
     dk = (curve.kappa[i + 1] - curve.kappa[i]) / seg
     dth = (curve.theta[i + 1] - curve.theta[i]) / seg
     kappa = curve.kappa[i] + dk * s
     theta = curve.theta[i] + dth * s
-    heading = curve.heading[i] + curve.kappa[i] * s + 0.5 * dk * s * s
-    offset = (curve.offset[i] + curve.heading[i] * s + 0.5 * curve.kappa[i] * s * s
-              + dk * s * s * s / 6.0)
+    heading, offset = _pose_on_segment(xk, curve.kappa, curve.heading, curve.offset, i, x)
     return kappa, dk, theta, dth, heading, offset
 
 
