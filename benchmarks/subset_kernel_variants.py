@@ -34,8 +34,21 @@ Kernels (each leaves the standard normal conditional on the level's domain invar
   along d conditioned on ``s' > s - w`` (ratio ``Phibar(s - w)/Phibar(s' - w)``);
   ``dir-logrw``: random walk of step tau in ``l = ln Phibar(s)``, in which the prior along any
   line is ``e^l`` (ratio ``e^(l' - l)``), alternating with aCS steps.
+* ``plane[:margin]``: ``dir-exp`` with d the steepest descent of the least-squares plane
+  ``g ~ b0 + b.u`` through *every* point evaluated so far (level 0 and every candidate of every
+  chain, accepted or not), not a mean of seeds; the exponential starts ``margin`` times the
+  seeds' mean excess below their smallest projection (``low - margin (mean - low)``; 0: at the
+  smallest). The plane's thousands of points carry little of any one seed's noise; the
+  kernel's parameters still depend on the seeds (their projections), as in the ``oracle`` rows.
 
     python benchmarks/subset_kernel_variants.py --seeds 200 acs ess:6.283 dir-exp:oracle
+    python benchmarks/subset_kernel_variants.py --seeds 100 --case parabolic:4.5:0.1 \
+        --n-dims 50 acs dir-exp:oracle plane plane:0.5 plane:1
+
+``--case``: ``linear`` (``g = beta - a.u``, a = (1, ..., 1)/sqrt(n), P = Phi(-beta)) or
+``parabolic:beta:kappa`` (``g = beta - u_1 + (kappa/2) sum_{i=2}^{11} u_i^2``,
+``P = E[Phi(-(beta + kappa X/2))]``, X ~ chi2_10, by ``scipy.integrate.quad``, as
+benchmarks/line_sampling_table.py).
 """
 
 from __future__ import annotations
@@ -125,7 +138,7 @@ class Directional:
 
     def __init__(self, kind: str, fit: str, param: float, direction, target: float = 0.44):
         self.kind, self.fit, self.param, self.a, self.target = kind, fit, param, direction, target
-        self.lam = 0.6
+        self.lam, self.margin = 0.6, 0.0
 
     def _fit(self, y):
         """Direction and leave-one-out projections of the fitting set y (a seed's own noise
@@ -149,6 +162,7 @@ class Directional:
         mu = np.array([p.mean() for p in proj])
         sd = np.array([p.std(ddof=1) for p in proj]) * (self.param if self.kind == "gauss" else 1)
         low = np.array([p.min() for p in proj])
+        low -= self.margin * (mu - low)
         rate = 1.0 / (mu - low)
         s_all = seeds.std(axis=0, ddof=1)
         u, gv = np.empty((ns, nc, n)), np.empty((ns, nc))
@@ -198,11 +212,39 @@ class Directional:
         return u.reshape(-1, n), gv.reshape(-1), evals
 
 
+class Plane(Directional):
+    """``dir-exp`` along the steepest descent of the least-squares plane of every evaluation
+    (``subset`` passes every evaluated point to :meth:`record`)."""
+
+    def __init__(self, margin: float = 0.0):
+        super().__init__("exp", "plane", 0.0, None)
+        self.margin = margin
+        self.hist_u, self.hist_g = [], []
+
+    def record(self, u, gv):
+        self.hist_u.append(u)
+        self.hist_g.append(gv)
+
+    def _fit(self, y):
+        x = np.concatenate(self.hist_u)
+        a = np.hstack([np.ones((x.shape[0], 1)), x])
+        coef, *_ = np.linalg.lstsq(a, np.concatenate(self.hist_g), rcond=None)
+        d = -coef[1:] / np.linalg.norm(coef[1:])
+        return d, y @ d
+
+
 def subset(g, n_dims, seed, kernel, n_per_level=1000, p0=0.1, max_levels=30):
     """One run; returns (P, evaluations, lineage variance of ln P, mean gamma over levels >= 1)."""
     rng = np.random.default_rng(seed)
     nc = round(p0 * n_per_level)
     ns = n_per_level // nc
+    if hasattr(kernel, "record"):
+        g_model = g
+
+        def g(points):
+            values = g_model(points)
+            kernel.record(points, values)
+            return values
     u = rng.standard_normal((n_per_level, n_dims))
     gv = g(u)
     evals = n_per_level
@@ -244,6 +286,8 @@ def make_kernel(spec: str, direction):
         return ACS(antithetic="branches")
     if name == "ess":
         return ESS(width=float(args[0]) if args else 2 * math.pi)
+    if name == "plane":
+        return Plane(float(args[0]) if args else 0.0)
     if name.startswith("dir-"):
         kind = name[4:]
         default = {"gauss": 2.0, "exp": 0.0, "trunc": 0.5, "logrw": 2.0}[kind]
@@ -255,19 +299,37 @@ def make_kernel(spec: str, direction):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("kernels", nargs="+", help="acs[:target], acs-antithetic, acs-branches, "
-                        "ess[:width], dir-{gauss,exp,trunc,logrw}[:oracle|self|cross[:param]]")
+                        "ess[:width], dir-{gauss,exp,trunc,logrw}[:oracle|self|cross[:param]], "
+                        "plane[:margin]")
+    parser.add_argument("--case", default="linear", help="linear or parabolic:beta:kappa")
     parser.add_argument("--beta", type=float, default=4.75)
     parser.add_argument("--n-dims", type=int, default=200)
     parser.add_argument("--n-per-level", type=int, default=1000)
     parser.add_argument("--seeds", type=int, default=200)
     args = parser.parse_args()
     direction = np.ones(args.n_dims) / np.sqrt(args.n_dims)
-    exact = float(stats.norm.sf(args.beta))
+    if args.case == "linear":
+        exact = float(stats.norm.sf(args.beta))
+        label = f"linear limit state, beta = {args.beta:g}"
 
-    def g(u):
-        return args.beta - u @ direction
+        def g(u):
+            return args.beta - u @ direction
+    else:
+        from scipy import integrate
 
-    print(f"linear limit state, beta = {args.beta:g}, {args.n_dims} dimensions, "
+        _, beta, kappa = args.case.split(":")
+        beta, kappa = float(beta), float(kappa)
+        exact = integrate.quad(
+            lambda x: stats.norm.sf(beta + 0.5 * kappa * x) * stats.chi2.pdf(x, 10),
+            0.0, np.inf, epsabs=0.0, epsrel=1e-10, limit=200)[0]
+        label = f"parabolic limit state, beta = {beta:g}, kappa = {kappa:g}"
+        direction = np.zeros(args.n_dims)
+        direction[0] = 1.0          # the oracle rows: the parabola's axis
+
+        def g(u):
+            return beta - u[:, 0] + 0.5 * kappa * np.sum(u[:, 1:11] ** 2, axis=1)
+
+    print(f"{label}, {args.n_dims} dimensions, "
           f"N = {args.n_per_level}, p0 = 0.1, {args.seeds} seeds; exact P = {exact:.4g}")
     print("| kernel | evaluations | mean / exact | c.o.v. observed | c.o.v. reported (lineage) "
           "| coverage of the 95 % interval | gamma |")
