@@ -40,12 +40,18 @@ Kernels (each leaves the standard normal conditional on the level's domain invar
   seeds' mean excess below their smallest projection (``low - margin (mean - low)``; 0: at the
   smallest). The plane's thousands of points carry little of any one seed's noise; the
   kernel's parameters still depend on the seeds (their projections), as in the ``oracle`` rows.
+* ``plane-trunc[:k]``: along the same direction, the standard normal truncated below at the
+  plane's own boundary of the level, ``(b0 - b_j)/|b|``, less ``k`` standard deviations of the
+  plane's residuals over all points (so that a curved boundary stays inside the support);
+  independent of the seeds; accepted iff the current state lies beyond the truncation and the
+  candidate in the level. ``plane-trunc-acs[:k]``: its steps alternate with aCS steps.
 
     python benchmarks/subset_kernel_variants.py --seeds 200 acs ess:6.283 dir-exp:oracle
     python benchmarks/subset_kernel_variants.py --seeds 100 --case parabolic:4.5:0.1 \
         --n-dims 50 acs dir-exp:oracle plane plane:0.5 plane:1
 
-``--case``: ``linear`` (``g = beta - a.u``, a = (1, ..., 1)/sqrt(n), P = Phi(-beta)) or
+``--case``: ``linear`` (``g = beta - a.u``, a = (1, ..., 1)/sqrt(n), P = Phi(-beta)),
+``chi2:probability:k`` (``g = c - sum_{i<k} u_i^2``, P = chi2_k.sf(c)) or
 ``parabolic:beta:kappa`` (``g = beta - u_1 + (kappa/2) sum_{i=2}^{11} u_i^2``,
 ``P = E[Phi(-(beta + kappa X/2))]``, X ~ chi2_10, by ``scipy.integrate.quad``, as
 benchmarks/line_sampling_table.py).
@@ -233,6 +239,59 @@ class Plane(Directional):
         return d, y @ d
 
 
+class PlaneTruncated(Plane):
+    """Along the plane's direction, the standard normal truncated at the plane's own boundary of
+    the level less ``k`` residual standard deviations (no seed enters the proposal)."""
+
+    def __init__(self, k: float = 2.0, alternate: bool = False):
+        super().__init__()
+        self.k, self.alternate, self.lam_acs = k, alternate, 0.6
+
+    def run(self, seeds, gseeds, labels, b, ns, g, rng):
+        nc, n = seeds.shape
+        x_all = np.concatenate(self.hist_u)
+        a = np.hstack([np.ones((x_all.shape[0], 1)), x_all])
+        g_all = np.concatenate(self.hist_g)
+        coef, *_ = np.linalg.lstsq(a, g_all, rcond=None)
+        norm = np.linalg.norm(coef[1:])
+        d = -coef[1:] / norm
+        resid_sd = float(np.std(g_all - a @ coef, ddof=a.shape[1]))
+        low = (coef[0] - b) / norm - self.k * resid_sd / norm    # g_plane = b0 - |b| s = b
+        log_tail = log_ndtr(-low)
+        spread = seeds.std(axis=0, ddof=1)
+        u, gv = np.empty((ns, nc, n)), np.empty((ns, nc))
+        u[0], gv[0] = seeds, gseeds
+        evals = 0
+        for t in range(1, ns):
+            x = u[t - 1]
+            if self.alternate and t % 2 == 1:                 # an aCS step (class ACS)
+                sigma = np.minimum(1.0, self.lam_acs * spread)
+                v = np.sqrt(1.0 - sigma * sigma) * x + sigma * rng.standard_normal((nc, n))
+                gn = g(v)
+                evals += nc
+                ok = gn <= b
+                u[t] = np.where(ok[:, None], v, x)
+                gv[t] = np.where(ok, gn, gv[t - 1])
+                self.lam_acs = math.exp(math.log(self.lam_acs) + (ok.mean() - 0.44) / math.sqrt(t))
+                continue
+            s = x @ d
+            sig = min(1.0, self.lam)
+            xi = rng.standard_normal((nc, n))
+            xi -= (xi @ d)[:, None] * d
+            perp = math.sqrt(1 - sig * sig) * (x - s[:, None] * d) + sig * xi
+            s_new = -ndtri_exp(log_tail + np.log(rng.random(nc)))   # N(0, 1) beyond low
+            v = perp + s_new[:, None] * d
+            gn = g(v)
+            evals += nc
+            # independence proposal proportional to the prior beyond low: the ratio is 1 when
+            # the current state is beyond low too, else 0 (it cannot be proposed back)
+            ok = (s >= low) & (gn <= b)
+            u[t] = np.where(ok[:, None], v, x)
+            gv[t] = np.where(ok, gn, gv[t - 1])
+            self.lam = math.exp(math.log(self.lam) + (ok.mean() - self.target) / math.sqrt(t))
+        return u.reshape(-1, n), gv.reshape(-1), evals
+
+
 def subset(g, n_dims, seed, kernel, n_per_level=1000, p0=0.1, max_levels=30):
     """One run; returns (P, evaluations, lineage variance of ln P, mean gamma over levels >= 1)."""
     rng = np.random.default_rng(seed)
@@ -288,6 +347,8 @@ def make_kernel(spec: str, direction):
         return ESS(width=float(args[0]) if args else 2 * math.pi)
     if name == "plane":
         return Plane(float(args[0]) if args else 0.0)
+    if name in ("plane-trunc", "plane-trunc-acs"):
+        return PlaneTruncated(float(args[0]) if args else 2.0, name.endswith("-acs"))
     if name.startswith("dir-"):
         kind = name[4:]
         default = {"gauss": 2.0, "exp": 0.0, "trunc": 0.5, "logrw": 2.0}[kind]
@@ -301,7 +362,8 @@ def main() -> None:
     parser.add_argument("kernels", nargs="+", help="acs[:target], acs-antithetic, acs-branches, "
                         "ess[:width], dir-{gauss,exp,trunc,logrw}[:oracle|self|cross[:param]], "
                         "plane[:margin]")
-    parser.add_argument("--case", default="linear", help="linear or parabolic:beta:kappa")
+    parser.add_argument("--case", default="linear",
+                        help="linear, parabolic:beta:kappa or chi2:probability:k")
     parser.add_argument("--beta", type=float, default=4.75)
     parser.add_argument("--n-dims", type=int, default=200)
     parser.add_argument("--n-per-level", type=int, default=1000)
@@ -314,7 +376,7 @@ def main() -> None:
 
         def g(u):
             return args.beta - u @ direction
-    else:
+    elif args.case.startswith("parabolic"):
         from scipy import integrate
 
         _, beta, kappa = args.case.split(":")
@@ -328,6 +390,16 @@ def main() -> None:
 
         def g(u):
             return beta - u[:, 0] + 0.5 * kappa * np.sum(u[:, 1:11] ** 2, axis=1)
+    elif args.case.startswith("chi2"):
+        _, probability, k = args.case.split(":")
+        exact, k = float(probability), int(k)
+        radius2 = float(stats.chi2.isf(exact, k))
+        label = f"chi-square limit state, k = {k}"
+
+        def g(u):
+            return radius2 - np.sum(u[:, :k] ** 2, axis=1)
+    else:
+        raise SystemExit(f"unknown --case {args.case!r}")
 
     print(f"{label}, {args.n_dims} dimensions, "
           f"N = {args.n_per_level}, p0 = 0.1, {args.seeds} seeds; exact P = {exact:.4g}")
