@@ -71,6 +71,14 @@ from ttbpipe.reliability.result import lognormal_interval
 from ttbpipe.reliability.subset import indicator_gamma, lineage_variance
 
 
+def _chain_arrays(seeds, gseeds, ns):
+    """States (ns, nc, n) and g values (ns, nc) of nc chains of ns states, row 0 the seeds."""
+    nc, n = seeds.shape
+    u, gv = np.empty((ns, nc, n)), np.empty((ns, nc))
+    u[0], gv[0] = seeds, gseeds
+    return u, gv
+
+
 class ACS:
     def __init__(self, target: float = 0.44, antithetic: str = ""):
         self.target, self.lam, self.antithetic = target, 0.6, antithetic
@@ -171,8 +179,7 @@ class Directional:
         low -= self.margin * (mu - low)
         rate = 1.0 / (mu - low)
         s_all = seeds.std(axis=0, ddof=1)
-        u, gv = np.empty((ns, nc, n)), np.empty((ns, nc))
-        u[0], gv[0] = seeds, gseeds
+        u, gv = _chain_arrays(seeds, gseeds, ns)
         evals = 0
         for t in range(1, ns):
             x = u[t - 1]
@@ -231,10 +238,17 @@ class Plane(Directional):
         self.hist_u.append(u)
         self.hist_g.append(gv)
 
-    def _fit(self, y):
+    def _plane(self):
+        """Coefficients (b0, b) of the least-squares plane of every evaluation and the standard
+        deviation of its residuals."""
         x = np.concatenate(self.hist_u)
         a = np.hstack([np.ones((x.shape[0], 1)), x])
-        coef, *_ = np.linalg.lstsq(a, np.concatenate(self.hist_g), rcond=None)
+        g_all = np.concatenate(self.hist_g)
+        coef, *_ = np.linalg.lstsq(a, g_all, rcond=None)
+        return coef, float(np.std(g_all - a @ coef, ddof=a.shape[1]))
+
+    def _fit(self, y):
+        coef, _ = self._plane()
         d = -coef[1:] / np.linalg.norm(coef[1:])
         return d, y @ d
 
@@ -249,18 +263,13 @@ class PlaneTruncated(Plane):
 
     def run(self, seeds, gseeds, labels, b, ns, g, rng):
         nc, n = seeds.shape
-        x_all = np.concatenate(self.hist_u)
-        a = np.hstack([np.ones((x_all.shape[0], 1)), x_all])
-        g_all = np.concatenate(self.hist_g)
-        coef, *_ = np.linalg.lstsq(a, g_all, rcond=None)
+        coef, resid_sd = self._plane()
         norm = np.linalg.norm(coef[1:])
         d = -coef[1:] / norm
-        resid_sd = float(np.std(g_all - a @ coef, ddof=a.shape[1]))
         low = (coef[0] - b) / norm - self.k * resid_sd / norm    # g_plane = b0 - |b| s = b
         log_tail = log_ndtr(-low)
         spread = seeds.std(axis=0, ddof=1)
-        u, gv = np.empty((ns, nc, n)), np.empty((ns, nc))
-        u[0], gv[0] = seeds, gseeds
+        u, gv = _chain_arrays(seeds, gseeds, ns)
         evals = 0
         for t in range(1, ns):
             x = u[t - 1]
