@@ -10,6 +10,12 @@ summary table; docs/reliability.md reports the result.
     python tools/rare_event_crosscheck.py --out results/crosscheck --stage subset --limit 0.45
     python tools/rare_event_crosscheck.py --out results/crosscheck --stage evt --limit 0.45
     python tools/rare_event_crosscheck.py --out results/crosscheck --stage line --limit 0.45
+    python tools/rare_event_crosscheck.py --out results/crosscheck --stage plane --limit 0.45
+
+(``--stage plane``: how much of every index a least-squares plane in the standard normals
+explains, from the Monte Carlo runs, in-sample and held out (fitted on the first 5/7 of the
+runs, tested on the rest); a plane-based Markov chain sampler or line sampling needs a plane
+that explains the index, docs/reliability.md sections 10 and 12.)
 
 (``--stage all``: Monte Carlo, then subset simulation and the tail model at the limit chosen
 from the Monte Carlo runs, the rounded ``--mc-quantile``.) The Monte Carlo points and the
@@ -56,6 +62,29 @@ def build(args):
     return case, Inputs(), float(irr["lead_in_m"]), model
 
 
+def plane_r2(runs: pd.DataFrame, points: np.ndarray) -> dict[str, tuple[float, float]]:
+    """Coefficient of determination of the least-squares plane ``index ~ b0 + b.u`` of every
+    varying index column of ``runs`` (rows: ``points``): in-sample, and held out (fitted on the
+    first 5/7 of the runs, evaluated on the rest; negative: worse than the mean)."""
+    design = np.hstack([np.ones((points.shape[0], 1)), points])
+    n_fit = (5 * points.shape[0]) // 7
+    out = {}
+    for name in runs.columns:
+        values = runs[name].to_numpy(dtype=float) if runs[name].dtype.kind in "fi" else None
+        if name == "point_index" or values is None or not np.isfinite(values).all():
+            continue
+        if np.ptp(values) == 0.0 or np.ptp(values) < 1e-12 * np.abs(values).max():
+            continue                                # run settings, not an index
+        r2 = []
+        for fit, test in ((slice(None), slice(None)), (slice(0, n_fit), slice(n_fit, None))):
+            coef, *_ = np.linalg.lstsq(design[fit], values[fit], rcond=None)
+            residual = values[test] - design[test] @ coef
+            r2.append(float(1.0 - residual @ residual
+                            / np.sum((values[test] - values[test].mean()) ** 2)))
+        out[name] = (r2[0], r2[1])
+    return out
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
@@ -71,7 +100,8 @@ def main(argv=None) -> int:
     parser.add_argument("--end-x-m", type=float, default=70.0)
     parser.add_argument("--approach-m", type=float, default=20.0)
     parser.add_argument("--profile-length-m", type=float, default=150.0)
-    parser.add_argument("--stage", choices=["mc", "subset", "evt", "line", "all"], default="all")
+    parser.add_argument("--stage", choices=["mc", "subset", "evt", "line", "plane", "all"],
+                        default="all")
     parser.add_argument("--line-n-per-level", type=int, default=300,
                         help="line sampling: points per level of the direction's subset simulation")
     parser.add_argument("--line-levels", type=int, default=3)
@@ -108,7 +138,8 @@ def main(argv=None) -> int:
         g.close()
         summary["mc_wall_s"] = time.time() - t0
     # the Monte Carlo runs are needed for the limit (none given) and the tail model only
-    mc = pd.read_parquet(mc_path) if args.limit is None or args.stage in ("evt", "all") else None
+    mc = pd.read_parquet(mc_path) if args.limit is None or args.stage in ("evt", "plane", "all") \
+        else None
     limit = args.limit if args.limit is not None else float(
         np.round(np.quantile(mc[args.index], args.mc_quantile), 3))
     summary["limit"] = limit
@@ -132,6 +163,11 @@ def main(argv=None) -> int:
         summary["subset"] = {**result.as_row(), "wall_s_this_call": time.time() - t0}
         result.details["levels"].to_csv(out / f"subset_levels_{limit:g}.csv", index=False)
         print(result, flush=True)
+    if args.stage == "plane":
+        summary["plane_r2"] = plane_r2(mc, monte_carlo_points(args.seed, inputs.n_dims,
+                                                              mc["point_index"].to_numpy()))
+        for name, (inside, held_out) in summary["plane_r2"].items():
+            print(f"{name:40s} R^2 in-sample {inside:7.3f}, held out {held_out:7.3f}", flush=True)
     if args.stage == "line":
         from ttbpipe.reliability import estimate_failure_probability
 
