@@ -30,7 +30,9 @@ from ttbpipe.reliability.result import lognormal_interval
 
 
 def limit_state(case: str):
-    """``linear:beta:n_dims`` or ``chi2:probability:k:n_dims`` -> (g, n_dims, exact, label)."""
+    """``linear:beta:n_dims``, ``chi2:probability:k:n_dims`` or ``parabolic:beta:kappa:n_dims``
+    (``g = beta - u_1 + (kappa/2) sum_{i=2}^{11} u_i^2``, exact by quadrature over chi2_10)
+    -> (g, n_dims, exact, label)."""
     kind, *args = case.split(":")
     if kind == "linear":
         beta, n_dims = float(args[0]), int(args[1])
@@ -42,6 +44,15 @@ def limit_state(case: str):
         radius2 = float(stats.chi2.isf(probability, k))
         return (lambda u: radius2 - np.sum(u[:, :k] ** 2, axis=1)), n_dims, probability, \
             f"χ², k = {k}"
+    if kind == "parabolic":
+        from scipy import integrate
+
+        beta, kappa, n_dims = float(args[0]), float(args[1]), int(args[2])
+        exact = integrate.quad(
+            lambda x: stats.norm.sf(beta + 0.5 * kappa * x) * stats.chi2.pdf(x, 10),
+            0.0, np.inf, epsabs=0.0, epsrel=1e-10, limit=200)[0]
+        return (lambda u: beta - u[:, 0] + 0.5 * kappa * np.sum(u[:, 1:11] ** 2, axis=1)), \
+            n_dims, exact, f"parabolic, β = {beta:g}, κ = {kappa:g}"
     raise ValueError(f"unknown case {case!r}")
 
 
@@ -57,7 +68,8 @@ def row(case: str, seeds: int, **options) -> str:
                   for r, c in zip(runs, cov_ab))]
     mean_ratio = p.mean() / exact
     se = p.std(ddof=1) / exact / np.sqrt(seeds)
-    return (f"| {label} | {n_dims} | {options.get('n_per_level', 1000)} | "
+    return (f"| {label} | {options.get('sampler', 'acs')} | {n_dims} | "
+            f"{options.get('n_per_level', 1000)} | "
             f"{options.get('level_probability', 0.1):g} | "
             f"{np.mean([r.n_evaluations for r in runs]):.0f} | {exact:.3g} | "
             f"{mean_ratio:.2f} ± {se:.2f} | {p.std(ddof=1) / p.mean():.2f} | "
@@ -75,16 +87,18 @@ def main() -> None:
     parser.add_argument("--level-probability", type=float, default=0.1)
     parser.add_argument("--target-acceptance", type=float, default=0.44)
     parser.add_argument("--lineage-lag", type=int, default=2)
+    parser.add_argument("--sampler", default="acs", help="acs or plane (SubsetSettings.sampler)")
     args = parser.parse_args()
     logging.disable(logging.WARNING)     # max_levels warnings of single runs
-    print("| limit state | dimension | N per level | p0 | evaluations | exact P | mean / exact "
+    print("| limit state | sampler | dimension | N per level | p0 | evaluations | exact P | mean / exact "
           "| c.o.v. observed | c.o.v. reported (Au & Beck) | coverage of the 95 % interval "
           "(with Au & Beck's c.o.v.) | seeds |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for case in args.case:
         print(row(case, args.seeds, n_per_level=args.n_per_level,
                   level_probability=args.level_probability,
-                  target_acceptance=args.target_acceptance, lineage_lag=args.lineage_lag),
+                  target_acceptance=args.target_acceptance, lineage_lag=args.lineage_lag,
+                  sampler=args.sampler),
               flush=True)
 
 

@@ -41,7 +41,8 @@ def estimate_failure_probability(g: Callable[[np.ndarray], np.ndarray], n_dims: 
 
     ``method="subset"``: options of :class:`SubsetSettings` (``n_per_level``,
     ``level_probability``, ``max_levels``, ``target_acceptance``, ``initial_scale``,
-    ``confidence_level``, ``lineage_lag``). ``method="monte_carlo"``: ``n_samples``, ``batch_size``,
+    ``confidence_level``, ``lineage_lag``, ``sampler`` ``"acs"`` or ``"plane"`` with
+    ``plane_min_r2`` and ``plane_margin``). ``method="monte_carlo"``: ``n_samples``, ``batch_size``,
     ``confidence_level``, ``interval`` (``"wilson"`` or ``"clopper-pearson"``).
     ``method="line_sampling"``: ``n_lines``, ``direction`` (``"subset"`` or an array),
     ``direction_n_per_level``, ``direction_levels``, ``direction_lines``, ``c_max``,

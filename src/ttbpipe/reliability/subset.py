@@ -26,6 +26,17 @@ advance in lockstep, so each chain step is one vectorised evaluation of ``Nc`` c
 ``lambda`` is adapted after every step from that step's acceptance; a level starts from the
 previous level's final ``lambda`` (restarting at 0.6 was measured no better).
 
+Second sampler, ``sampler="plane"`` (opt-in; docs/reliability.md section 10, ``plane-trunc``
+of benchmarks/subset_kernel_variants.py). The least-squares plane ``g ~ b0 + b.u`` is fitted
+through every point evaluated so far (its sums accumulated in evaluation order). Where it
+explains g (adjusted coefficient of determination >= ``plane_min_r2``, default 0.99: a flat
+boundary) and rests on at least twice as many points as coefficients, every chain step draws
+the component along ``d = -b/|b|`` from the standard normal truncated below at the plane's
+own boundary of the level, ``(b0 - b_j)/|b|``, less ``plane_margin`` standard deviations of the
+plane's residuals, and moves the rest by a pCN step. No seed enters that proposal; the candidate
+is accepted iff the current state lies beyond the truncation and the candidate in F_j (the
+Metropolis-Hastings ratio of a proposal proportional to the prior). Elsewhere the level runs aCS.
+
 Coefficient of variation. Per level, Au & Beck (2001, eqs. 19-29): for a level estimate
 ``p_j`` from N correlated chain states, ``delta_j^2 = (1 - p_j)/(N p_j) (1 + gamma_j)``, with
 ``gamma_j = 2 sum_{k=1}^{Ns-1} (1 - k Nc/N) rho_j(k)`` and ``rho_j(k)`` the lag-k correlation of
@@ -65,6 +76,7 @@ from typing import Any, Callable
 
 import numpy as np
 import pandas as pd
+from scipy.special import log_ndtr, ndtri_exp
 
 from .. import streams
 from .monte_carlo import evaluate_limit_state
@@ -76,6 +88,8 @@ __all__ = ["SubsetSettings", "SubsetSimulation", "subset_simulation", "indicator
 log = logging.getLogger(__name__)
 
 STATE_VERSION = 2
+#: Markov chain samplers of :class:`SubsetSimulation` (module docstring).
+SAMPLERS = ("acs", "plane")
 
 
 @dataclass(frozen=True)
@@ -87,7 +101,8 @@ class SubsetSettings:
     not reach the failure domain; ``target_acceptance`` and ``initial_scale`` (lambda) of the
     aCS sampler (Papaioannou et al. 2015: 0.44, 0.6); ``lineage_lag``, how many levels back the
     c.o.v. groups the states by common ancestor (:func:`lineage_variance`; 2 measured best,
-    docs/reliability.md section 10).
+    docs/reliability.md section 10); ``sampler`` ``"acs"`` or ``"plane"`` (module docstring),
+    with ``plane_min_r2`` and ``plane_margin``.
     """
 
     n_per_level: int = 1000
@@ -97,6 +112,9 @@ class SubsetSettings:
     initial_scale: float = 0.6
     confidence_level: float = 0.95
     lineage_lag: int = 2
+    sampler: str = "acs"
+    plane_min_r2: float = 0.99
+    plane_margin: float = 2.0
 
     def __post_init__(self) -> None:
         p0, n = float(self.level_probability), int(self.n_per_level)
@@ -112,6 +130,10 @@ class SubsetSettings:
             raise ValueError("max_levels must be >= 1")
         if int(self.lineage_lag) < 0:
             raise ValueError("lineage_lag must be >= 0")
+        if self.sampler not in SAMPLERS:
+            raise ValueError(f"sampler must be one of {SAMPLERS}, got {self.sampler!r}")
+        if not 0.0 <= float(self.plane_min_r2) <= 1.0 or not float(self.plane_margin) >= 0.0:
+            raise ValueError("plane_min_r2 must be in [0, 1] and plane_margin >= 0")
 
     @property
     def n_chains(self) -> int:
@@ -255,6 +277,18 @@ class SubsetSimulation:
         # and, from level 1 on, the previous-level chain of each chain's seed
         self._indicators: list[np.ndarray] = []
         self._parents: list[np.ndarray | None] = [None]
+        # the plane sampler: least-squares sums over every evaluated point (rows [1, u]), and
+        # the level's direction and truncation (direction None: the level runs aCS only)
+        n_coef = self.n_dims + 1 if settings.sampler == "plane" else 0
+        self._xtx = np.zeros((n_coef, n_coef))
+        self._xtg = np.zeros(n_coef)
+        self._gsum = np.zeros(2)                 # sum g, sum g^2
+        self._direction: np.ndarray | None = None
+        self._plane_low = 0.0
+        self._plane_scale = settings.initial_scale
+        self._plane_adaptations = 0
+        self._plane_start_ok = np.zeros(0, dtype=bool)
+        self._plane_r2 = float("nan")
 
     # --- the machine ----------------------------------------------------------------------
     def ask(self) -> np.ndarray:
@@ -280,20 +314,33 @@ class SubsetSimulation:
         points, self._pending = self._pending, None
         self.n_evaluations += values.size
         s = self.settings
+        if s.sampler == "plane":
+            rows = np.hstack([np.ones((points.shape[0], 1)), points])
+            self._xtx += rows.T @ rows
+            self._xtg += rows.T @ values
+            self._gsum += (values.sum(), values @ values)
         if self.level == 0:
             self._u[:], self._g[:] = points, values
             self._close_level()
             return
         accept = values <= self._threshold
+        plane_step = self._plane_step()
+        if plane_step:
+            accept &= self._plane_start_ok
         previous = slice((self._step - 1) * s.n_chains, self._step * s.n_chains)
         current = slice(self._step * s.n_chains, (self._step + 1) * s.n_chains)
         self._u[current] = np.where(accept[:, None], points, self._u[previous])
         self._g[current] = np.where(accept, values, self._g[previous])
         rate = float(accept.mean())
         self._accepted.append(rate)
-        self._adaptations += 1
-        self._scale = float(np.exp(np.log(self._scale)
-                                   + (rate - s.target_acceptance) / np.sqrt(self._adaptations)))
+        if plane_step:
+            self._plane_adaptations += 1
+            self._plane_scale = float(np.exp(np.log(self._plane_scale) + (
+                rate - s.target_acceptance) / np.sqrt(self._plane_adaptations)))
+        else:
+            self._adaptations += 1
+            self._scale = float(np.exp(np.log(self._scale) + (
+                rate - s.target_acceptance) / np.sqrt(self._adaptations)))
         self._step += 1
         if self._step == s.chain_length:
             self._close_level()
@@ -314,13 +361,63 @@ class SubsetSimulation:
             out[i] = np.random.default_rng(seq).standard_normal(self.n_dims)
         return out
 
+    def _plane_step(self) -> bool:
+        """Whether the current chain step is a plane step (every step of a plane level)."""
+        return self._direction is not None
+
     def _candidates(self) -> np.ndarray:
         s = self.settings
         current = self._u[(self._step - 1) * s.n_chains:self._step * s.n_chains]
+        if self._plane_step():
+            return self._plane_candidates(current)
         sigma = np.minimum(1.0, self._scale * self._sigma)
         rho = np.sqrt(1.0 - sigma * sigma)
         xi = np.stack([rng.standard_normal(self.n_dims) for rng in self._rngs])
         return rho * current + sigma * xi
+
+    def _plane_candidates(self, current: np.ndarray) -> np.ndarray:
+        """A plane step: along d the standard normal beyond the truncation, the rest by pCN."""
+        d = self._direction
+        along = current @ d
+        self._plane_start_ok = along >= self._plane_low
+        sigma = min(1.0, self._plane_scale)
+        log_tail = float(log_ndtr(-self._plane_low))
+        out = np.empty_like(current)
+        for c, rng in enumerate(self._rngs):
+            xi = rng.standard_normal(self.n_dims)
+            xi -= (xi @ d) * d
+            s_new = -float(ndtri_exp(log_tail + np.log(rng.random())))
+            out[c] = np.sqrt(1.0 - sigma * sigma) * (current[c] - along[c] * d) + sigma * xi \
+                + s_new * d
+        return out
+
+    def _fit_plane(self) -> None:
+        """The next level's direction and truncation, or None where the plane cannot carry it."""
+        self._direction = None
+        n_points, n_coef = self.n_evaluations, self._xtx.shape[0]
+        if n_points < 2 * n_coef:
+            self._plane_r2 = float("nan")
+            return
+        try:
+            coef = np.linalg.solve(self._xtx, self._xtg)
+        except np.linalg.LinAlgError:
+            self._plane_r2 = float("nan")
+            return
+        sum_g, sum_g2 = self._gsum
+        total = sum_g2 - sum_g * sum_g / n_points
+        residual = max(float(sum_g2 - 2.0 * coef @ self._xtg + coef @ self._xtx @ coef), 0.0)
+        # adjusted R^2: in-sample R^2 of n_coef coefficients on n points takes about
+        # n_coef / n of the unexplained variance from noise (docs/reliability.md section 10)
+        self._plane_r2 = (float(1.0 - residual / total * (n_points - 1) / (n_points - n_coef))
+                          if total > 0.0 else float("nan"))
+        norm = float(np.linalg.norm(coef[1:]))
+        if not (norm > 0.0 and self._plane_r2 >= self.settings.plane_min_r2):
+            return
+        residual_sd = np.sqrt(residual / (n_points - n_coef))
+        self._direction = -coef[1:] / norm
+        # the plane's boundary of the level: b0 - |b| s = b_j
+        self._plane_low = float((coef[0] - self._threshold) / norm
+                                - self.settings.plane_margin * residual_sd / norm)
 
     def _close_level(self) -> None:
         """The level's N points are complete: next threshold, its statistics, next seeds."""
@@ -378,6 +475,11 @@ class SubsetSimulation:
         seed_g = self._g[seeds].copy()
         self._sigma = seed_u.std(axis=0, ddof=1) if nc > 1 else np.ones(self.n_dims)
         self._threshold = float(threshold)
+        if s.sampler == "plane":
+            self._fit_plane()
+            self._levels[-1]["next_sampler"] = "plane" if self._direction is not None else "acs"
+            self._levels[-1]["plane_r2"] = self._plane_r2
+            self._plane_adaptations = 0
         self.level += 1
         self._u[:nc], self._g[:nc] = seed_u, seed_g
         self._g[nc:] = np.nan
@@ -419,7 +521,9 @@ class SubsetSimulation:
                 (1.0 - (1.0 - self.settings.confidence_level) ** (1.0 / n_last))
             low, high = 0.0, upper
         s = self.settings
-        method = (f"subset simulation (Au & Beck 2001; aCS sampler), N = {s.n_per_level} per "
+        sampler = ("aCS sampler" if s.sampler == "acs" else "plane sampler where the adjusted "
+                   f"R^2 >= {s.plane_min_r2:g}, else aCS")
+        method = (f"subset simulation (Au & Beck 2001; {sampler}), N = {s.n_per_level} per "
                   f"level, p0 = {s.level_probability:g}, {len(table)} levels, lognormal interval "
                   f"with the lineage c.o.v. (lag {s.lineage_lag})")
         return FailureProbability(probability, low, high, cov, int(self.n_evaluations), method,
@@ -440,11 +544,20 @@ class SubsetSimulation:
             "rngs": [_generator_state(r) for r in self._rngs],
             "has_pending": self._pending is not None,
             "n_indicators": len(self._indicators), "n_parents": len(self._parents),
+            "plane_low": self._plane_low, "plane_scale": self._plane_scale,
+            "plane_adaptations": self._plane_adaptations,
+            "plane_r2": self._plane_r2,
+            "has_direction": self._direction is not None,
         }
         arrays = {"u": self._u, "g": self._g, "sigma": self._sigma,
                   "pending": self._pending if self._pending is not None else np.empty((0, 0))}
         arrays.update({f"indicator_{j}": ind for j, ind in enumerate(self._indicators)})
         arrays.update({f"parent_{j}": par for j, par in enumerate(self._parents) if j > 0})
+        if self.settings.sampler == "plane":
+            arrays.update(xtx=self._xtx, xtg=self._xtg, gsum=self._gsum,
+                          plane_start_ok=self._plane_start_ok)
+            if self._direction is not None:
+                arrays["direction"] = self._direction
         tmp = path.with_name(path.name + ".tmp")
         with open(tmp, "wb") as fh:
             np.savez(fh, meta=np.array(json.dumps(meta)), **arrays)
@@ -466,6 +579,14 @@ class SubsetSimulation:
             self._indicators = [data[f"indicator_{j}"].copy() for j in range(meta["n_indicators"])]
             self._parents = [None] + [data[f"parent_{j}"].copy()
                                       for j in range(1, meta["n_parents"])]
+            if self.settings.sampler == "plane":
+                self._xtx, self._xtg = data["xtx"].copy(), data["xtg"].copy()
+                self._gsum = data["gsum"].copy()
+                self._plane_start_ok = data["plane_start_ok"].copy()
+                self._direction = data["direction"].copy() if meta["has_direction"] else None
+                self._plane_low, self._plane_scale = meta["plane_low"], meta["plane_scale"]
+                self._plane_adaptations = meta["plane_adaptations"]
+                self._plane_r2 = meta["plane_r2"]
         self.level, self.n_evaluations, self.done = meta["level"], meta["n_evaluations"], meta["done"]
         self._step, self._threshold, self._scale = meta["step"], meta["threshold"], meta["scale"]
         self._adaptations, self._accepted = meta["adaptations"], list(meta["accepted"])
