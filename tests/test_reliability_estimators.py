@@ -144,12 +144,16 @@ def test_subset_agrees_with_monte_carlo_where_both_resolve():
     assert sus.n_evaluations < mc.n_evaluations / 5
 
 
-def test_resume_after_every_step_gives_the_same_answer(tmp_path):
+@pytest.mark.parametrize("sampler", ["acs", "plane"])
+def test_resume_after_every_step_gives_the_same_answer(tmp_path, sampler):
     """Saving and reloading the state between every ask and tell (a kill at any point) does
-    not change a single number."""
+    not change a single number; with the plane sampler, its least-squares sums, direction,
+    truncation and the pending step's start mask are part of the state."""
     g = linear_limit_state(3.0, 40)
-    settings = SubsetSettings(n_per_level=200)
+    settings = SubsetSettings(n_per_level=200, sampler=sampler)
     reference = SubsetSimulation(40, seed=9, settings=settings).run(g)
+    if sampler == "plane":
+        assert (reference.details["levels"]["next_sampler"].iloc[:-1] == "plane").all()
     state = tmp_path / "state.npz"
     sus = SubsetSimulation(40, seed=9, settings=settings)
     sus.save(state)
