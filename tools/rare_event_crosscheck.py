@@ -137,9 +137,12 @@ def main(argv=None) -> int:
             print(f"MC {len(done)} runs, {time.time() - t0:.0f} s", flush=True)
         g.close()
         summary["mc_wall_s"] = time.time() - t0
-    # the Monte Carlo runs are needed for the limit (none given) and the tail model only
-    mc = pd.read_parquet(mc_path) if args.limit is None or args.stage in ("evt", "plane", "all") \
-        else None
+    # the Monte Carlo runs are needed for the limit (none given), the tail model and the plane
+    needs_mc = args.limit is None or args.stage in ("evt", "plane", "all")
+    if needs_mc and not mc_path.exists():
+        raise SystemExit(f"{mc_path}: no Monte Carlo runs; run --stage mc first "
+                         f"(--limit and --stage {args.stage} need them)")
+    mc = pd.read_parquet(mc_path) if needs_mc else None
     limit = args.limit if args.limit is not None else float(
         np.round(np.quantile(mc[args.index], args.mc_quantile), 3))
     summary["limit"] = limit
