@@ -3,9 +3,8 @@
 from ttbpipe.io import read_table, save_figure
 from ttbpipe.logs import setup_logging
 from ttbpipe.tipm.plots import plot_psd_bands, plot_selection_fidelity
-from ttbpipe.tipm.population import PSDPopulation
+from ttbpipe.tipm.population import PSDPopulation, load_population
 from ttbpipe.tipm.selection import TIPMSelection
-from ttbpipe.tipm.stages import load_population
 from ttbpipe.workflow import snakemake_context
 
 snakemake = snakemake_context(globals(), "tipm_figures", date="2025-12-15")

@@ -75,8 +75,7 @@ STREAM_MC_PROFILES = streams.STUDY_MC_PROFILES
 @functools.lru_cache(maxsize=2)
 def _mc_population(paths: tuple[str, ...], band: tuple[float, float] | None):
     """Pooled PSD population of the Monte Carlo irregularity scenario (cached per process)."""
-    from ..tipm.population import PSDPopulation
-    from ..tipm.stages import load_population
+    from ..tipm.population import PSDPopulation, load_population
 
     return PSDPopulation.concat(load_population(list(paths), band))
 

@@ -14,9 +14,26 @@
 Design and validation: docs/tipm.md.
 """
 
-from .evolution import SpectralEvolution, forecast_coverage
-from .population import PSDPopulation, synthetic_population
-from .selection import TIPMSelection, TIPMSelector, selection_metrics
+import importlib
 
-__all__ = ["PSDPopulation", "synthetic_population", "TIPMSelection", "TIPMSelector",
-           "selection_metrics", "SpectralEvolution", "forecast_coverage"]
+#: Public name -> submodule. Loaded on first use, so that a process reading PSD tables
+#: (``tipm.population``, ``tipm.profiles``: every Monte Carlo batch) does not import
+#: ``scipy.stats`` with the selection and distribution modules (about 1 s per process).
+_EXPORTS = {"PSDPopulation": "population", "synthetic_population": "population",
+            "load_population": "population", "TIPMSelection": "selection",
+            "TIPMSelector": "selection", "selection_metrics": "selection",
+            "SpectralEvolution": "evolution", "forecast_coverage": "evolution"}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

@@ -15,14 +15,16 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ..channels import SPECTRAL_CHANNELS
+from ..io import read_table
 
-__all__ = ["PSDPopulation", "synthetic_population"]
+__all__ = ["PSDPopulation", "load_population", "synthetic_population"]
 
 log = logging.getLogger(__name__)
 
@@ -110,38 +112,52 @@ class PSDPopulation:
         missing = [c for c in LONG_COLUMNS if c not in table.columns]
         if missing:
             raise ValueError(f"{source}: missing columns {missing}; expected {list(LONG_COLUMNS)}")
-        table = table.loc[:, list(LONG_COLUMNS)]
+        # Arrays and integer keys instead of DataFrame.pivot: the pivot was nine tenths of
+        # loading a campaign (docs/performance.md); same checks, same numbers, same order.
+        section = table["section"].to_numpy()
+        frequency = table["spatial_frequency_per_m"].to_numpy(dtype=float)
+        channel = table["channel"]
+        psd_values = table["psd_mm2_m"].to_numpy(dtype=float)
+        start_m = table["section_start_m"].to_numpy()
+        end_m = table["section_end_m"].to_numpy()
         if wavelength_band_m is not None:
             lam_min, lam_max = (float(v) for v in wavelength_band_m)
-            n = table["spatial_frequency_per_m"].to_numpy()
-            keep = (n >= (1 / lam_max) * (1 - 1e-9)) & (n <= (1 / lam_min) * (1 + 1e-9))
-            table = table.loc[keep]
-        present = set(table["channel"].astype(str).unique())
+            keep = ((frequency >= (1 / lam_max) * (1 - 1e-9))
+                    & (frequency <= (1 / lam_min) * (1 + 1e-9)))
+            section, frequency, psd_values = section[keep], frequency[keep], psd_values[keep]
+            start_m, end_m, channel = start_m[keep], end_m[keep], channel[keep]
+        channel_codes, channel_names = pd.factorize(channel.astype(str), sort=False)
+        present = set(channel_names)
         channels = tuple(c for c in SPECTRAL_CHANNELS if c in present)
         unknown = present - set(SPECTRAL_CHANNELS)
         if unknown:
             raise ValueError(f"{source}: unknown channels {sorted(unknown)}")
-        if table.duplicated(["section", "channel", "spatial_frequency_per_m"]).any():
-            row = int(np.flatnonzero(table.duplicated(["section", "channel",
-                                                       "spatial_frequency_per_m"]))[0])
+        channel_index = np.array([channels.index(c) for c in channel_names],
+                                 dtype=np.int64)[channel_codes]
+        sections_idx, first_row, section_index = np.unique(section, return_index=True,
+                                                           return_inverse=True)
+        freqs, frequency_index = np.unique(frequency, return_inverse=True)
+        n_sec, n_freq, n_ch = sections_idx.size, freqs.size, len(channels)
+        pair = section_index.astype(np.int64) * n_freq + frequency_index
+        key = pair * n_ch + channel_index
+        if (np.bincount(key, minlength=n_sec * n_freq * n_ch) > 1).any():
+            order = np.argsort(key, kind="stable")
+            repeated = key[order][1:] == key[order][:-1]
+            # the first row (table order) that repeats an earlier (section, channel, frequency)
+            row = int(order[1:][repeated].min())
             raise ValueError(f"{source}: duplicate (section, channel, frequency) at row {row}")
-        wide = table.pivot(index=["section", "spatial_frequency_per_m"], columns="channel",
-                           values="psd_mm2_m")
-        wide = wide.reindex(columns=list(channels)).sort_index()
-        sections_idx = wide.index.get_level_values(0).unique()
-        freqs = np.sort(wide.index.get_level_values(1).unique().to_numpy(dtype=float))
-        full = pd.MultiIndex.from_product([sections_idx, freqs])
-        if len(wide) != len(full):
+        n_pairs = np.count_nonzero(np.bincount(pair, minlength=n_sec * n_freq))
+        if n_pairs != n_sec * n_freq:
             raise ValueError(f"{source}: sections do not share one frequency grid "
-                             f"({len(wide)} rows, {len(full)} expected)")
-        wide = wide.reindex(full)
-        if wide.isna().any().any():
+                             f"({n_pairs} rows, {n_sec * n_freq} expected)")
+        psd = np.full(n_sec * n_freq * n_ch, np.nan)
+        psd[key] = psd_values
+        if np.isnan(psd).any():
             raise ValueError(f"{source}: missing PSD values for some (section, channel, frequency)")
-        psd = wide.to_numpy(dtype=float).reshape(len(sections_idx), freqs.size, len(channels))
-        sec = (table.drop_duplicates("section").set_index("section")
-               .loc[sections_idx, ["section_start_m", "section_end_m"]].reset_index())
+        sec = pd.DataFrame({"section": sections_idx, "section_start_m": start_m[first_row],
+                            "section_end_m": end_m[first_row]})
         sec.insert(0, "campaign_date", str(campaign_date))
-        return cls(psd, freqs, channels, sec)
+        return cls(psd.reshape(n_sec, n_freq, n_ch), freqs, channels, sec)
 
     @classmethod
     def concat(cls, populations: Iterable["PSDPopulation"]) -> "PSDPopulation":
@@ -157,6 +173,16 @@ class PSDPopulation:
                                  "frequency grid or channel set; use one psd configuration for all")
         return cls(np.concatenate([p.psd_mm2_m for p in pops]), first.frequency_per_m,
                    first.channels, pd.concat([p.sections for p in pops], ignore_index=True))
+
+
+def load_population(paths: Sequence[str | Path], wavelength_band_m) -> list[PSDPopulation]:
+    """One population per PSD table ``<date>.parquet`` (the campaign date is the file stem)."""
+    band = None if wavelength_band_m is None else tuple(wavelength_band_m)
+    pops = []
+    for path in sorted(paths, key=lambda p: Path(p).stem):
+        pops.append(PSDPopulation.from_long_table(read_table(path), Path(path).stem, band,
+                                                  source=str(path)))
+    return pops
 
 
 def synthetic_population(n_sections: int, frequency_per_m: np.ndarray, mean_psd: np.ndarray,

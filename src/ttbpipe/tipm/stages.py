@@ -21,7 +21,7 @@ from ..io import read_table
 from .distribution import (FIT_COLUMNS, MIN_SECTIONS_FOR_FIT, SUMMARY_COLUMNS,
                            fit_ordinate_distributions, summarize_fits)
 from .evolution import SpectralEvolution, forecast_coverage
-from .population import PSDPopulation
+from .population import PSDPopulation, load_population
 from .profiles import (STREAM_FORECAST, STREAM_MONTE_CARLO, STREAM_REPRESENTATIVE, date_key,
                        profiles_from_psd_sets)
 from .selection import TIPMSelection, TIPMSelector, selection_metrics
@@ -54,16 +54,6 @@ def population_dates(all_dates: Sequence[str], date: str, window: str | int) -> 
     if window < 1:
         raise ValueError(f"tipm.population_campaigns must be 'all' or >= 1, got {window}")
     return earlier[-window:]
-
-
-def load_population(paths: Sequence[str | Path], wavelength_band_m) -> list[PSDPopulation]:
-    """One population per PSD table ``<date>.parquet`` (the campaign date is the file stem)."""
-    band = None if wavelength_band_m is None else tuple(wavelength_band_m)
-    pops = []
-    for path in sorted(paths, key=lambda p: Path(p).stem):
-        pops.append(PSDPopulation.from_long_table(read_table(path), Path(path).stem, band,
-                                                  source=str(path)))
-    return pops
 
 
 def selector_from_config(cfg: Mapping[str, Any]) -> TIPMSelector:

@@ -1,0 +1,116 @@
+"""PSDPopulation.from_long_table against a slow, obviously correct reference (DataFrame.pivot).
+
+The population is built with integer keys instead of a pivot (docs/performance.md). The
+reference below is the pivot path it replaced; both must give the same arrays, section table and
+error messages, whatever the row order, the channels present and the band.
+"""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ttbpipe.channels import SPECTRAL_CHANNELS
+from ttbpipe.tipm.population import LONG_COLUMNS, PSDPopulation, synthetic_population
+
+
+def pivot_reference(table, campaign_date="", wavelength_band_m=None, source="PSD table"):
+    """The population by DataFrame.pivot, with the same checks in the same order."""
+    missing = [c for c in LONG_COLUMNS if c not in table.columns]
+    if missing:
+        raise ValueError(f"{source}: missing columns {missing}; expected {list(LONG_COLUMNS)}")
+    table = table.loc[:, list(LONG_COLUMNS)]
+    if wavelength_band_m is not None:
+        lam_min, lam_max = (float(v) for v in wavelength_band_m)
+        n = table["spatial_frequency_per_m"].to_numpy()
+        keep = (n >= (1 / lam_max) * (1 - 1e-9)) & (n <= (1 / lam_min) * (1 + 1e-9))
+        table = table.loc[keep]
+    present = set(table["channel"].astype(str).unique())
+    channels = tuple(c for c in SPECTRAL_CHANNELS if c in present)
+    unknown = present - set(SPECTRAL_CHANNELS)
+    if unknown:
+        raise ValueError(f"{source}: unknown channels {sorted(unknown)}")
+    duplicated = table.duplicated(["section", "channel", "spatial_frequency_per_m"])
+    if duplicated.any():
+        row = int(np.flatnonzero(duplicated)[0])
+        raise ValueError(f"{source}: duplicate (section, channel, frequency) at row {row}")
+    wide = table.pivot(index=["section", "spatial_frequency_per_m"], columns="channel",
+                       values="psd_mm2_m")
+    wide = wide.reindex(columns=list(channels)).sort_index()
+    sections_idx = wide.index.get_level_values(0).unique()
+    freqs = np.sort(wide.index.get_level_values(1).unique().to_numpy(dtype=float))
+    full = pd.MultiIndex.from_product([sections_idx, freqs])
+    if len(wide) != len(full):
+        raise ValueError(f"{source}: sections do not share one frequency grid "
+                         f"({len(wide)} rows, {len(full)} expected)")
+    wide = wide.reindex(full)
+    if wide.isna().any().any():
+        raise ValueError(f"{source}: missing PSD values for some (section, channel, frequency)")
+    psd = wide.to_numpy(dtype=float).reshape(len(sections_idx), freqs.size, len(channels))
+    sec = (table.drop_duplicates("section").set_index("section")
+           .loc[sections_idx, ["section_start_m", "section_end_m"]].reset_index())
+    sec.insert(0, "campaign_date", str(campaign_date))
+    return PSDPopulation(psd, freqs, channels, sec)
+
+
+def long_table(n_sections=7, seed=3):
+    """A long PSD table as ttbpipe.irregularity.psd.section_psds writes it (rows shuffled)."""
+    rng = np.random.default_rng(seed)
+    freqs = np.arange(1, 41) / 200.0
+    mean = np.outer(1.0 / (freqs + 0.05) ** 2, np.arange(1, len(SPECTRAL_CHANNELS) + 1))
+    pop = synthetic_population(n_sections, freqs, mean, rng)
+    rows = []
+    for s in range(n_sections):
+        section = 10 + 3 * s                         # not 0..n-1: keys are the values
+        for c, name in enumerate(pop.channels):
+            rows.append(pd.DataFrame({
+                "section": section, "section_start_m": 1000.0 * s,
+                "section_end_m": 1000.0 * (s + 1), "channel": name,
+                "spatial_frequency_per_m": freqs, "psd_mm2_m": pop.psd_mm2_m[s, :, c]}))
+    table = pd.concat(rows, ignore_index=True)
+    table["channel"] = table["channel"].astype("string")
+    return table.sample(frac=1.0, random_state=seed).reset_index(drop=True)
+
+
+def same(a, b):
+    return (np.array_equal(a.psd_mm2_m, b.psd_mm2_m)
+            and np.array_equal(a.frequency_per_m, b.frequency_per_m)
+            and a.channels == b.channels and a.sections.equals(b.sections))
+
+
+def outcome(build, table):
+    try:
+        return build(table, "2025-01-15")
+    except ValueError as err:
+        return f"ValueError: {err}"
+
+
+@pytest.mark.parametrize("band", [None, (2.0, 200.0), (10.0, 50.0)])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_population_equals_the_pivot_reference(band, seed):
+    table = long_table(seed=seed)
+    for variant in (table, table.sort_values(["section", "channel", "spatial_frequency_per_m"]),
+                    table[table["channel"] != SPECTRAL_CHANNELS[1]]):
+        fast = PSDPopulation.from_long_table(variant, "2025-01-15", band)
+        assert same(fast, pivot_reference(variant, "2025-01-15", band))
+
+
+def test_bad_tables_get_the_reference_messages():
+    table = long_table()
+    first = (table["section"] == table["section"].iloc[0]) & (
+        table["spatial_frequency_per_m"] == table["spatial_frequency_per_m"].iloc[0])
+    cases = {
+        "duplicate": pd.concat([table, table.iloc[[40, 7]]], ignore_index=True),
+        "duplicate inside": pd.concat([table.iloc[:90], table.iloc[[60]], table.iloc[90:]],
+                                      ignore_index=True),
+        "missing value": table.drop(index=[11]),
+        "NaN value": table.assign(psd_mm2_m=table["psd_mm2_m"].where(table.index != 5)),
+        "unknown channel": table.assign(channel=table["channel"].where(table.index != 4, "gauge")),
+        "grid": table[~first],
+        "negative": table.assign(psd_mm2_m=table["psd_mm2_m"].where(table.index != 9, -1.0)),
+        "missing column": table.drop(columns=["section_end_m"]),
+    }
+    for name, bad in cases.items():
+        expected = outcome(pivot_reference, bad)
+        got = outcome(PSDPopulation.from_long_table, bad)
+        assert isinstance(expected, str), name      # every case is an error
+        assert got == expected, name
