@@ -281,7 +281,10 @@ def test_a_batch_carries_the_assessment_of_each_sample_as_ttbpipe_assess_gives_i
     study's EN 1990 span-frequency record (rule study_span_frequencies) instead of analysing the
     structure itself writes the same extremes (DataFrame.equals)."""
     from ttbpipe.assessment import assess
-    from ttbpipe.assessment.columns import utilisation_column, value_column
+    from ttbpipe.assessment.api import assess_records
+    from ttbpipe.assessment.run import RunData
+    from ttbpipe.assessment.columns import (extreme_columns, row_metadata, utilisation_column,
+                                            value_column)
     from ttbpipe.assessment.study import resolve_assessment, run_case
     from ttbpipe.simulation.coupled import run_coupled
 
@@ -324,6 +327,10 @@ def test_a_batch_carries_the_assessment_of_each_sample_as_ttbpipe_assess_gives_i
     table, summary = run_coupled(case, factors=factors)
     for name in ("gb5599", "en1990"):
         rows = assess(table, summary, name, config=case)
+        # the batch reads the records (assess_records), not the table: the same columns
+        records = assess_records(RunData(table, summary, case), name)
+        assert extreme_columns(records) == extreme_columns(rows)
+        assert row_metadata(records) == row_metadata(rows)
         for row in rows.itertuples():
             assert extremes[value_column(name, row.index)].iloc[0] == row.processed_value
             if np.isfinite(row.limit):

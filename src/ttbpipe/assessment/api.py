@@ -9,7 +9,7 @@ from typing import Any, Mapping
 
 import pandas as pd
 
-from .base import rows_to_frame
+from .base import records_to_frame, rows_to_records
 from .registry import get_profile
 from .run import RunData
 
@@ -25,15 +25,24 @@ def assess(table: pd.DataFrame, summary: Mapping[str, Any], standard: str, *,
     and the processing parameters (columns :data:`~.base.COLUMNS`). ``options`` update the
     profile's defaults (unknown keys are an error); ``config`` is the run's case (the EN 1990
     deck checks build its structure for the modal analysis)."""
+    return records_to_frame(assess_records(RunData(table, summary, config), standard,
+                                           options=options))
+
+
+def assess_records(run: RunData, standard: str, *,
+                   options: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
+    """:func:`assess` as records (one dict per row, keys :data:`~.base.COLUMNS`) of a run's
+    :class:`~.run.RunData`, without building the DataFrame: a study assesses every sample
+    against several profiles, which then share the run's histories (:class:`~.run.RunData`
+    reads each set of columns once)."""
     profile = get_profile(standard)
     resolved = profile.resolve_options(options)
-    run = RunData(table, summary, config)
-    df = rows_to_frame(profile, profile.evaluate(run, resolved))
-    for row in df.itertuples():
+    records = rows_to_records(profile, profile.evaluate(run, resolved))
+    for row in records:
         log.info("%s %s (%s): %.4g %s (raw %.4g), limit %.4g, utilisation %.3f", profile.name,
-                 row.index, row.location, row.processed_value, row.unit, row.raw_value, row.limit,
-                 row.utilisation)
-    return df
+                 row["index"], row["location"], row["processed_value"], row["unit"],
+                 row["raw_value"], row["limit"], row["utilisation"])
+    return records
 
 
 def assess_result(path: str | Path, standard: str, *,

@@ -108,16 +108,33 @@ def governing(values: np.ndarray, limits: np.ndarray | float,
     return i, float(v[i]), float(lim[i])
 
 
-def rows_to_frame(profile: Profile, rows: list[Row]) -> pd.DataFrame:
-    """The result table of one profile (columns :data:`COLUMNS`)."""
+#: Result columns that hold numbers (floats, NaN where they do not apply).
+FLOAT_COLUMNS = ("processed_value", "raw_value", "limit", "utilisation", "filter_low_hz",
+                 "filter_high_hz", "filter_order", "window_m", "step_m")
+
+
+def rows_to_records(profile: Profile, rows: list[Row]) -> list[dict[str, Any]]:
+    """The result records of one profile (keys :data:`COLUMNS`, numbers as floats): the rows
+    of :func:`rows_to_frame` without the DataFrame, for code that reads a few fields of every
+    row (a study assesses every sample; building the frame cost more than reading it)."""
     records = []
     for row in rows:
         rec = asdict(row)
         rec.update(standard=profile.standard, profile=profile.name, utilisation=row.utilisation)
+        for c in FLOAT_COLUMNS:
+            rec[c] = float(rec[c])
         records.append({c: rec[c] for c in COLUMNS})
+    return records
+
+
+def records_to_frame(records: list[dict[str, Any]]) -> pd.DataFrame:
+    """The result table (columns :data:`COLUMNS`) of :func:`rows_to_records` records."""
     df = pd.DataFrame.from_records(records, columns=list(COLUMNS))
-    for c in ("processed_value", "raw_value", "limit", "utilisation", "filter_low_hz",
-              "filter_high_hz", "filter_order", "window_m", "step_m"):
+    for c in FLOAT_COLUMNS:
         df[c] = df[c].astype(float)
     return df
 
+
+def rows_to_frame(profile: Profile, rows: list[Row]) -> pd.DataFrame:
+    """The result table of one profile (columns :data:`COLUMNS`)."""
+    return records_to_frame(rows_to_records(profile, rows))

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Iterable, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 import pandas as pd
@@ -99,14 +99,19 @@ def limit_column(profile: str, index: str) -> str:
     return f"{profile}_{stem}_{LIMIT}{suffix}"
 
 
-def extreme_columns(table: pd.DataFrame) -> dict[str, float]:
-    """The extremes-row columns of one profile's assessment table (see the module docstring)."""
+def _records(table: pd.DataFrame | Iterable[Mapping[str, Any]]) -> Iterable[Mapping[str, Any]]:
+    return table.to_dict("records") if isinstance(table, pd.DataFrame) else table
+
+
+def extreme_columns(table: pd.DataFrame | Iterable[Mapping[str, Any]]) -> dict[str, float]:
+    """The extremes-row columns of one profile's assessment (its table, or the table's records:
+    :func:`ttbpipe.assessment.api.assess_records`; see the module docstring)."""
     out: dict[str, float] = {}
-    for row in table.itertuples(index=False):
-        out[value_column(row.profile, row.index)] = float(row.processed_value)
-        if np.isfinite(row.limit):
-            out[utilisation_column(row.profile, row.index)] = float(row.utilisation)
-            out[limit_column(row.profile, row.index)] = float(row.limit)
+    for row in _records(table):
+        out[value_column(row["profile"], row["index"])] = float(row["processed_value"])
+        if np.isfinite(row["limit"]):
+            out[utilisation_column(row["profile"], row["index"])] = float(row["utilisation"])
+            out[limit_column(row["profile"], row["index"])] = float(row["limit"])
     return out
 
 
@@ -139,12 +144,12 @@ def _unit(suffix: str) -> str:
     return dict(UNIT_SUFFIXES).get(suffix, "1")
 
 
-def row_metadata(table: pd.DataFrame) -> list[dict[str, str]]:
-    """Clause, category, unit and limit source of each row of a profile's table (JSON-able): what
-    the report needs besides the values; the study keeps them in its batches' provenance."""
-    return [{"profile": r.profile, "index": r.index, "clause": r.clause, "category": r.category,
-             "unit": r.unit, "limit_source": r.limit_source, "standard": r.standard}
-            for r in table.itertuples(index=False)]
+def row_metadata(table: pd.DataFrame | Iterable[Mapping[str, Any]]) -> list[dict[str, str]]:
+    """Clause, category, unit and limit source of each row of a profile's assessment (its table
+    or the table's records; JSON-able): what the report needs besides the values; the study
+    keeps them in its batches' provenance."""
+    keys = ("profile", "index", "clause", "category", "unit", "limit_source", "standard")
+    return [{k: r[k] for k in keys} for r in _records(table)]
 
 
 def assessed_indices(columns: Iterable[str], metadata: Iterable[Mapping[str, str]] = ()

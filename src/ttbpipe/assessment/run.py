@@ -132,7 +132,13 @@ class RunData:
 
     # -- histories ----------------------------------------------------------------------
     def _columns(self, names: list[str]) -> np.ndarray:
-        return self.table[names].to_numpy(float)
+        # column by column (a sub-DataFrame first costs several times more), into the
+        # column-major layout DataFrame.to_numpy gives, so that reductions along the rows
+        # sum in the same order
+        out = np.empty((len(self.table), len(names)), order="F")
+        for j, name in enumerate(names):
+            out[:, j] = self.table[name].to_numpy(float)
+        return out
 
     @cached_property
     def wheel_labels(self) -> list[str]:

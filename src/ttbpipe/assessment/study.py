@@ -5,7 +5,8 @@ default every profile, :data:`DEFAULT_STANDARDS`) and updates their defaults wit
 ``assessment.options.<profile>``. :func:`run_case` adds to a sample's case what the selected
 profiles need recorded (the EN 1990 A2 twist monitors, :func:`.monitors.deck_check_monitors`,
 when ``en1990`` is selected with ``twist`` on); :func:`assess_sample` assesses the run's table
-and summary with the same code as ``ttbpipe assess`` (:func:`ttbpipe.assessment.assess`) and
+and summary with the same code as ``ttbpipe assess`` (:func:`.api.assess_records`: the rows of
+:func:`ttbpipe.assessment.assess` without building its table) and
 returns the extremes-row columns of :func:`.columns.extreme_columns` and the rows' metadata.
 
 EN 1990 A2's f0 and f3 come from the modal analysis of the study's nominal structure, cached per
@@ -24,9 +25,10 @@ from typing import Any, Mapping
 import pandas as pd
 
 from ..configuration import validate_section
-from .api import assess
+from .api import assess_records
 from .columns import extreme_columns, row_metadata
 from .registry import get_profile
+from .run import RunData
 
 #: Profiles a study assesses when ``assessment.standard`` is not given.
 DEFAULT_STANDARDS = ("en14363", "gb5599", "en1990", "en12299")
@@ -107,8 +109,9 @@ def assess_sample(table: pd.DataFrame, summary: Mapping[str, Any], case: Mapping
     nominal = {k: v for k, v in case.items() if k != "properties"}
     columns: dict[str, float] = {}
     metadata: list[dict[str, str]] = []
+    run = RunData(table, summary, nominal)       # read once, shared by the profiles
     for name in assessment["standard"]:
-        result = assess(table, summary, name, options=assessment["options"][name], config=nominal)
+        result = assess_records(run, name, options=assessment["options"][name])
         columns.update(extreme_columns(result))
         metadata += row_metadata(result)
     return columns, metadata
