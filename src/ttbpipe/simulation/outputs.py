@@ -146,15 +146,21 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
     for direction in ("vertical", "lateral"):
         per_car = {k: v for k, v in sperling.items() if k.endswith(f"_{direction}")}
         out[f"sperling_{direction}"] = float(max(per_car.values()))
+    deck_peak: dict[str, float] = {}       # filtered deck peak per column, filtered once
     if setup.monitors is not None:
         peaks = {name: float(raw.monitors.peak[i]) for i, name in enumerate(setup.monitors.names)}
         dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
+        for axis in ("z", "y"):
+            for cols in deck_columns(table.columns, axis).values():
+                for c in cols:
+                    if c not in deck_peak:
+                        deck_peak[c] = lowpass_peak(table[c].to_numpy(float), dt_out,
+                                                    deck_filter_hz)
         for direction, axis in (("vertical", "z"), ("lateral", "y")):
             deck = [c for cols in deck_columns(table.columns, axis).values() for c in cols]
             rail = [k for k in peaks if k.startswith("rail_") and k.endswith(f"_{axis}_acc_m_s2")]
             if deck:
-                out[f"max_deck_{direction}_acc_m_s2"] = max(
-                    lowpass_peak(table[c].to_numpy(float), dt_out, deck_filter_hz) for c in deck)
+                out[f"max_deck_{direction}_acc_m_s2"] = max(deck_peak[c] for c in deck)
             if rail:
                 out[f"max_rail_{direction}_acc_m_s2"] = float(max(peaks[k] for k in rail))
         disp = [k for k in peaks if k.startswith("girder_span") and k.endswith("_z_disp_mm")]
@@ -164,11 +170,9 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
         car, direction = key.split("_")
         out[PER_CAR[0 if direction == "vertical" else 1].format(car=car[3:])] = float(value)
     if setup.monitors is not None:
-        dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
         for axis, name in zip(("z", "y"), PER_SPAN):
             for s, cols in deck_columns(table.columns, axis).items():
-                out[name.format(span=s)] = max(lowpass_peak(table[c].to_numpy(float), dt_out,
-                                                            deck_filter_hz) for c in cols)
+                out[name.format(span=s)] = max(deck_peak[c] for c in cols)
     return out
 
 
