@@ -65,6 +65,31 @@ def test_killed_run_resumes_to_the_same_estimate(uninterrupted, tmp_path):
     pd.testing.assert_frame_equal(row[columns], reference[columns], check_exact=True)
 
 
+def test_plane_sampler_is_selected_by_the_study(uninterrupted, tmp_path):
+    """study.scenarios.subset.sampler: plane reaches SubsetSettings: the method names the plane
+    sampler and the state file has a digest of its own. Twenty points per level never make a
+    plane of n_dims + 1 coefficients eligible (it needs twice as many points), so every level
+    runs aCS with the same random numbers: the aCS estimate bit for bit
+    (tests/test_reliability_subset_plane.py checks the fallback on exact limit states)."""
+    from ttbpipe.configuration import ConfigurationError
+    from ttbpipe.reliability.study import resolve_subset, settings_digest
+
+    _, reference = uninterrupted
+    config = copy.deepcopy(CONFIG)
+    config["study"]["scenarios"]["subset"]["sampler"] = "plane"
+    assert resolve_subset(CONFIG)["sampler"] == "acs"
+    assert (settings_digest(config, "carbody_vertical_acc")
+            != settings_digest(CONFIG, "carbody_vertical_acc"))
+    row = run_subset_limit(config, "carbody_vertical_acc", tmp_path / "plane.parquet", workers=1)
+    assert "plane sampler" in row.iloc[0]["method"]
+    assert "aCS sampler" in reference.iloc[0]["method"]
+    columns = [c for c in RESULT_COLUMNS if c not in ("wall_time_s", "method")]
+    pd.testing.assert_frame_equal(row[columns], reference[columns], check_exact=True)
+    config["study"]["scenarios"]["subset"]["sampler"] = "gibbs"
+    with pytest.raises(ConfigurationError, match="sampler"):
+        resolve_subset(config)
+
+
 def test_unknown_or_disabled_limit_is_named():
     config = copy.deepcopy(CONFIG)
     config["limits"]["disabled"] = ["carbody_vertical_acc"]

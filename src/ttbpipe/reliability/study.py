@@ -142,6 +142,7 @@ def run_subset_limit(config: Mapping[str, Any], limit_name: str, out: str | os.P
     sus_settings = SubsetSettings(n_per_level=settings["n_per_level"],
                                   level_probability=settings["level_probability"],
                                   max_levels=settings["max_levels"],
+                                  sampler=settings["sampler"],
                                   confidence_level=float((config.get("limits") or {}).get(
                                       "confidence_level", 0.95)))
     if state_path.exists():
