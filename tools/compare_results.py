@@ -12,7 +12,10 @@ Every file under the two folders is compared, and both must hold the same files:
   the configuration keys given with ``--ignore-config-key`` (dotted paths: settings that select
   how a run executes, e.g. ``simulation.executor``, and that the batch settings digest excludes).
   Other Parquet metadata (pandas' schema description, Arrow's) is compared as is.
-* every other file (JSON repair records, reST/HTML report pages, PNG figures): the bytes.
+* every other file (JSON repair records, reST/HTML report pages, PNG figures): the bytes;
+* except the records of how a job ran rather than what it computed (:data:`RUN_RECORDS`): only
+  their listed keys (``study/kernels.json``, the numba compilation run: its code version, not its
+  wall time or how many kernels the cache already held).
 * ``.snakemake_timestamp`` markers of directory outputs are skipped (their mtime is the content),
   and so are the files given with ``--skip`` (paths relative to the folders, e.g. the report's
   rendering of the configuration when the runs' executors differ); they must still exist in both.
@@ -34,6 +37,8 @@ import pyarrow.parquet as pq
 PROVENANCE_KEY = b"ttbpipe"
 SKIP_NAMES = {".snakemake_timestamp"}
 ALWAYS_IGNORED = ("created_utc",)
+#: JSON records of how a job ran (timings, cache state): relative path -> the keys compared.
+RUN_RECORDS = {"study/kernels.json": ("code_version",)}
 
 
 def _provenance_key() -> bytes:
@@ -141,6 +146,11 @@ def main(argv: list[str] | None = None) -> int:
         if name.endswith(".parquet"):
             counts["parquet"] += 1
             problems += [f"{name}: {d}" for d in compare_parquet(p, q, args.ignore_config_key)]
+        elif name in RUN_RECORDS:
+            counts["other"] += 1
+            ra, rb = json.loads(p.read_text()), json.loads(q.read_text())
+            problems += [f"{name}: {k} {ra.get(k)!r} != {rb.get(k)!r}"
+                         for k in RUN_RECORDS[name] if ra.get(k) != rb.get(k)]
         else:
             counts["other"] += 1
             if p.read_bytes() != q.read_bytes():
@@ -152,6 +162,7 @@ def main(argv: list[str] | None = None) -> int:
           f"(ignored: provenance {', '.join(ALWAYS_IGNORED)}"
           + (f"; config {', '.join(args.ignore_config_key)}" if args.ignore_config_key else "")
           + (f"; content of {', '.join(args.skip)}" if args.skip else "")
+          + f"; of {', '.join(RUN_RECORDS)} all but {', '.join(sorted({k for v in RUN_RECORDS.values() for k in v}))}"
           + ")")
     return 1 if problems else 0
 
