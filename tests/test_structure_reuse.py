@@ -1,6 +1,7 @@
 """Samples that share a structure share one model (ttbpipe.simulation.setup._nominal_structure):
 its global matrices, stability analysis and static factorisation are made once per process
-(ttbpipe.structure.StructureModel.derived). Reference: the same run on a freshly built model
+(ttbpipe.structure.StructureModel.derived); samples that share a train share its assembled model
+(ttbpipe.simulation.setup._train_model). Reference: the same run on a freshly built model
 (the cache emptied first); the shared model must give it bit for bit (the project's determinism
 rule: a sample's results depend on its inputs only, not on the samples run before it in the
 process). Real coupled runs on one 32 m span, one car, 10 m of run (a few seconds)."""
@@ -37,8 +38,10 @@ def fresh_runs():
     out = {}
     for seed in (1, 2):
         coupled_setup._NOMINAL_STRUCTURES.clear()
+        coupled_setup._TRAINS.clear()
         out[seed] = run(seed)
     coupled_setup._NOMINAL_STRUCTURES.clear()
+    coupled_setup._TRAINS.clear()
     return out
 
 
@@ -58,6 +61,7 @@ def test_a_shared_model_gives_the_fresh_models_results_bit_for_bit(fresh_runs):
         assert_same_run(run(seed), fresh_runs[seed])
     again = coupled_setup.prepare(case(2))
     assert again.structure is first.structure
+    assert again.model is first.model
     assert again.structure.matrices() is first.structure.matrices()
     assert set(first.structure._derived) >= {"matrices", "static", ("stability", 6)}
 
@@ -104,3 +108,22 @@ def test_stability_analysis_once_per_model_and_safety_applied_per_call():
     assert full["dt_s"] == full["dt_limit_s"]
     assert part["dt_s"] == 0.9 * part["dt_limit_s"] and part["dt_limit_s"] == full["dt_limit_s"]
     assert full["dt_s"] == full["dt_limit_s"]
+
+
+def test_the_train_model_is_keyed_on_its_configuration_and_does_not_follow_the_callers_dict():
+    """Another composition or car mass builds another train model; editing the train section a
+    model was built from afterwards does not change that model."""
+    coupled_setup._TRAINS.clear()
+    config = copy.deepcopy(case(1))
+    config["train"] = {"composition": ["trailer"], "trailer": {"car_mass": 40000.0}}
+    a = coupled_setup.prepare(config).model
+    mass = a.mass.copy()
+    heavier = copy.deepcopy(config)
+    heavier["train"]["trailer"]["car_mass"] = 45000.0
+    b = coupled_setup.prepare(heavier).model
+    assert b is not a and b.mass[0] == 45000.0 and a.mass[0] == 40000.0
+    config["train"]["trailer"]["car_mass"] = 50000.0      # the caller edits its own dict
+    np.testing.assert_array_equal(a.mass, mass)
+    config["train"]["trailer"]["car_mass"] = 40000.0
+    assert coupled_setup.prepare(config).model is a
+    assert len(coupled_setup._TRAINS) <= coupled_setup._TRAINS_KEPT

@@ -258,6 +258,30 @@ def _nominal_structure(config: Mapping[str, Any], layout: Any):
     return _NOMINAL_STRUCTURES[key]
 
 
+#: The last trains built in this process, by their configuration (:func:`_train_model`).
+_TRAINS: dict[str, tuple[TrainParameters, TrainModel]] = {}
+_TRAINS_KEPT = 2
+
+
+def _train_model(config: Mapping[str, Any]) -> tuple[TrainParameters, TrainModel]:
+    """A ``train:`` section's parameters and assembled model, built once per process and
+    configuration: every sample of a study runs the same train, and assembling its suspension
+    matrices element by element took about a tenth of a sample's work outside the time loop.
+    The model is not changed after assembly (its arrays are read, never written), so a shared
+    one gives the results of a fresh one bit for bit (tests/test_structure_reuse.py)."""
+    try:
+        key = json.dumps(config, sort_keys=True, allow_nan=False)
+    except (TypeError, ValueError):   # not plain configuration data: build, do not keep
+        params = train_from_config(dict(config))
+        return params, build_train_model(params)
+    if key not in _TRAINS:
+        params = train_from_config(dict(config))
+        while len(_TRAINS) >= _TRAINS_KEPT:
+            _TRAINS.pop(next(iter(_TRAINS)))
+        _TRAINS[key] = (params, build_train_model(params))
+    return _TRAINS[key]
+
+
 def nominal_structure(case: Mapping[str, Any]):
     """The structure a case runs on before random properties: its ``structure:`` section on
     its ``simulation.layout`` (the cant and the curvature in plan of its curves), shared within
@@ -386,8 +410,7 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
     speed = float(speed_kmh) / 3.6
     if speed <= 0:
         raise ValueError(f"simulation.speed_kmh must be positive, got {speed_kmh}")
-    train = train_from_config(train_cfg)
-    model = build_train_model(train)
+    train, model = _train_model(train_cfg)
     geom = build_geometry(train.contact)
     track_kind = sim.get("track", "structure")
     margin = float(sim.get("margin_m", 5.0))
@@ -532,8 +555,7 @@ def _second_train(cfg: dict, structure, train_cfg: dict, speed: float, track_ind
     v_kmh = cfg.get("speed_kmh", speed * 3.6)
     if not float(v_kmh) > 0:
         raise ValueError(f"{where}.speed_kmh must be positive, got {v_kmh}")
-    params = train_from_config(tcfg)
-    model = build_train_model(params)
+    params, model = _train_model(tcfg)
     train_len = -float(model.wheelset_x.min())
     x_lead0, _ = _run_span({"start_x_m": cfg.get("start_x_m")}, structure, train_len, margin,
                            t_dir, where)

@@ -1,0 +1,97 @@
+"""Wall time of one study sample's stages outside its time loop (paper case 3's Monte Carlo samples).
+
+    python benchmarks/study_sample_stages.py ROOT [--samples 6]
+
+ROOT: a clone in which `snakemake --cores 2 --configfile config/case3.yaml` has written at least
+the Monte Carlo design, the PSD tables and the span frequencies (results/case3/study/design/mc.parquet,
+results/case3/psd/*.parquet, results/case3/study/span_frequencies.json). Runs the design's first
+sample as a warm-up (population, structure, numba cache), then the next ``--samples`` ones
+through `ttbpipe.study.samples.run_sample` as a batch does, with `time.perf_counter` timers
+wrapped around its stages (profile, set-up, static state, train model, time loop, results table,
+summary, finiteness check, assessment), and prints each stage's mean per sample and the time
+outside the loop. Compare codes side by side (run the script of each checkout alternately).
+Timings only; the results are those of the batch (tests/test_study_batch.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import functools
+import glob
+import time
+from pathlib import Path
+
+import yaml
+
+
+def _merge(base: dict, over: dict) -> dict:
+    out = dict(base)
+    for key, value in over.items():
+        out[key] = (_merge(out[key], value) if isinstance(value, dict)
+                    and isinstance(out.get(key), dict) else value)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("root", type=Path)
+    parser.add_argument("--samples", type=int, default=6)
+    args = parser.parse_args()
+
+    import ttbpipe.assessment.study as assessment_study
+    import ttbpipe.simulation.coupled as coupled
+    import ttbpipe.simulation.setup as setup
+    from ttbpipe.io import read_table
+    from ttbpipe.study import samples
+    from ttbpipe.study.batch import _sample_kwargs
+    from ttbpipe.study.plan import mc_profile_settings
+
+    spent: collections.Counter = collections.Counter()
+
+    def timed(module, name: str) -> None:
+        if not hasattr(module, name):     # an older checkout without that stage
+            return
+        function = getattr(module, name)
+
+        @functools.wraps(function)
+        def wrapper(*a, **k):
+            start = time.perf_counter()
+            try:
+                return function(*a, **k)
+            finally:
+                spent[f"{module.__name__.rsplit('.', 1)[-1]}.{name}"] += time.perf_counter() - start
+
+        setattr(module, name, wrapper)
+
+    for module, name in [(samples, "mc_profile"), (setup, "build_train_model"),
+                         (setup, "static_equilibrium_trains"), (coupled, "prepare"),
+                         (coupled, "integrate"), (coupled, "results_table"),
+                         (coupled, "summarise"), (coupled, "check_finite"),
+                         (assessment_study, "assess_sample")]:
+        timed(module, name)
+
+    root = args.root
+    config = _merge(yaml.safe_load((root / "config/config.yaml").read_text()),
+                    yaml.safe_load((root / "config/case3.yaml").read_text()))
+    design = read_table(root / "results/case3/study/design/mc.parquet")
+    paths = sorted(glob.glob(str(root / "results/case3/psd/*.parquet")))
+    profiles = {"irregularity_mc": {**mc_profile_settings(config), "psd_paths": paths,
+                                    "date": max(Path(p).stem for p in paths)}}
+    kwargs = _sample_kwargs(config, profiles, root / "results/case3/study/span_frequencies.json")
+    rows = design.sort_values("sample_index").to_dict("records")
+    samples.run_sample(rows[0], **kwargs)
+    spent.clear()
+    start = time.perf_counter()
+    for row in rows[1:1 + args.samples]:
+        samples.run_sample(row, **kwargs)
+    per_sample = (time.perf_counter() - start) / args.samples
+    print(f"{args.samples} samples: {per_sample:.3f} s per sample")
+    for stage, seconds in spent.most_common():
+        print(f"  {stage:40s} {1e3 * seconds / args.samples:8.1f} ms")
+    outside = per_sample - spent["coupled.integrate"] / args.samples
+    print(f"  outside the time loop: {1e3 * outside:.1f} ms")
+
+
+if __name__ == "__main__":
+    main()
