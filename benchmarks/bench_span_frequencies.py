@@ -13,25 +13,17 @@ dropping the passed matrices), and checks that both give the same frequencies.
 from __future__ import annotations
 
 import argparse
-import copy
 import os
 import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import yaml  # noqa: E402
+from snakemake.utils import update_config  # noqa: E402
 
 from ttbpipe.assessment import modal as assessment_modal  # noqa: E402
 from ttbpipe.structure import build_structure  # noqa: E402
 from ttbpipe.structure import modal as structure_modal  # noqa: E402
-
-
-def _merged(base: dict, overlay: dict) -> dict:
-    out = copy.deepcopy(base)
-    for key, value in overlay.items():
-        out[key] = (_merged(out[key], value) if isinstance(value, dict)
-                    and isinstance(out.get(key), dict) else value)
-    return out
 
 
 def main() -> None:
@@ -41,7 +33,8 @@ def main() -> None:
     args = parser.parse_args()
     config = yaml.safe_load(open("config/config.yaml"))
     if args.configfile != "config/config.yaml":
-        config = _merged(config, yaml.safe_load(open(args.configfile)))
+        # merged as `snakemake --configfile` merges it
+        update_config(config, yaml.safe_load(open(args.configfile)))
     model = build_structure(config["structure"])
     fast = structure_modal.modal_analysis
 

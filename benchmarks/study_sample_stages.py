@@ -23,14 +23,7 @@ import time
 from pathlib import Path
 
 import yaml
-
-
-def _merge(base: dict, over: dict) -> dict:
-    out = dict(base)
-    for key, value in over.items():
-        out[key] = (_merge(out[key], value) if isinstance(value, dict)
-                    and isinstance(out.get(key), dict) else value)
-    return out
+from snakemake.utils import update_config
 
 
 def main() -> None:
@@ -72,8 +65,9 @@ def main() -> None:
         timed(module, name)
 
     root = args.root
-    config = _merge(yaml.safe_load((root / "config/config.yaml").read_text()),
-                    yaml.safe_load((root / "config/case3.yaml").read_text()))
+    # the study configuration as `snakemake --configfile config/case3.yaml` merges it
+    config = yaml.safe_load((root / "config/config.yaml").read_text())
+    update_config(config, yaml.safe_load((root / "config/case3.yaml").read_text()))
     design = read_table(root / "results/case3/study/design/mc.parquet")
     paths = sorted(glob.glob(str(root / "results/case3/psd/*.parquet")))
     profiles = {"irregularity_mc": {**mc_profile_settings(config), "psd_paths": paths,

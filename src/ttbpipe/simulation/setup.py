@@ -229,8 +229,24 @@ def rigid_packed():
         rail_n_nodes=0, rail_dof0=np.zeros(2, dtype=np.int64))
 
 
+def _kept_per_process(table: dict[str, Any], kept: int, key_data: Any, build) -> Any:
+    """``build()`` once per process and configuration ``key_data`` (its canonical JSON is the
+    key of ``table``); the last ``kept`` results are kept, so that a batch alternating between
+    two stays cached. Configuration that is not plain JSON data is built and not kept."""
+    try:
+        key = json.dumps(key_data, sort_keys=True, allow_nan=False)
+    except (TypeError, ValueError):
+        return build()
+    if key not in table:
+        value = build()
+        while len(table) >= kept:
+            table.pop(next(iter(table)))
+        table[key] = value
+    return table[key]
+
+
 #: The last nominal structures built in this process, by their configuration
-#: (:func:`_nominal_structure`); two, so that a batch alternating between two stays cached.
+#: (:func:`_nominal_structure`).
 _NOMINAL_STRUCTURES: dict[str, Any] = {}
 _NOMINAL_STRUCTURES_KEPT = 2
 
@@ -245,17 +261,11 @@ def _nominal_structure(config: Mapping[str, Any], layout: Any):
     from ..structure import build_structure
     from ..vehicle.curving import cant_knots, plan_knots
 
-    try:
-        key = json.dumps([config, layout], sort_keys=True, allow_nan=False)
-    except (TypeError, ValueError):   # not plain configuration data: build, do not keep
-        return build_structure(config, cant=cant_knots(layout), plan=plan_knots(layout))
-    if key not in _NOMINAL_STRUCTURES:
-        structure = build_structure(copy.deepcopy(dict(config)), cant=cant_knots(layout),
-                                    plan=plan_knots(layout))
-        while len(_NOMINAL_STRUCTURES) >= _NOMINAL_STRUCTURES_KEPT:
-            _NOMINAL_STRUCTURES.pop(next(iter(_NOMINAL_STRUCTURES)))
-        _NOMINAL_STRUCTURES[key] = structure
-    return _NOMINAL_STRUCTURES[key]
+    # a copy of the configuration: a caller editing its dict later does not change the model
+    return _kept_per_process(
+        _NOMINAL_STRUCTURES, _NOMINAL_STRUCTURES_KEPT, [config, layout],
+        lambda: build_structure(copy.deepcopy(dict(config)), cant=cant_knots(layout),
+                                plan=plan_knots(layout)))
 
 
 #: The last trains built in this process, by their configuration (:func:`_train_model`).
@@ -269,17 +279,11 @@ def _train_model(config: Mapping[str, Any]) -> tuple[TrainParameters, TrainModel
     matrices element by element took about a tenth of a sample's work outside the time loop.
     The model is not changed after assembly (its arrays are read, never written), so a shared
     one gives the results of a fresh one bit for bit (tests/test_structure_reuse.py)."""
-    try:
-        key = json.dumps(config, sort_keys=True, allow_nan=False)
-    except (TypeError, ValueError):   # not plain configuration data: build, do not keep
+    def build() -> tuple[TrainParameters, TrainModel]:
         params = train_from_config(dict(config))
         return params, build_train_model(params)
-    if key not in _TRAINS:
-        params = train_from_config(dict(config))
-        while len(_TRAINS) >= _TRAINS_KEPT:
-            _TRAINS.pop(next(iter(_TRAINS)))
-        _TRAINS[key] = (params, build_train_model(params))
-    return _TRAINS[key]
+
+    return _kept_per_process(_TRAINS, _TRAINS_KEPT, config, build)
 
 
 def nominal_structure(case: Mapping[str, Any]):
