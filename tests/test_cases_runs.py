@@ -83,6 +83,26 @@ def test_mc_profile_has_the_sections_variance(tmp_path):
         mc_profile(population, 9, 6, sample_index=0)
 
 
+def test_mc_profile_from_the_pooled_table_is_the_same(tmp_path):
+    """The workflow's batches read the pooled population table (rule study_mc_population); the
+    profile is the one the campaigns' PSD tables give, bit for bit."""
+    from ttbpipe.tipm.population import write_pooled_population
+
+    path, _ = _population_file(tmp_path)
+    pooled = tmp_path / "mc_population.parquet"
+    write_pooled_population([path], [2.0, 20.0], pooled)
+    common = {"wavelength_band_m": [2.0, 20.0], "length_m": 400.0, "dx_m": 0.25,
+              "date": "2025-12-15"}
+    for section in (1, 5):
+        pd.testing.assert_frame_equal(
+            mc_profile({**common, "psd_paths": [path]}, 9, section, sample_index=7),
+            mc_profile({**common, "pooled_path": str(pooled)}, 9, section, sample_index=7),
+            check_exact=True)
+    with pytest.raises(ValueError, match="pooled over the wavelength band"):
+        mc_profile({**common, "wavelength_band_m": [2.0, 200.0], "pooled_path": str(pooled)},
+                   9, 1, sample_index=7)
+
+
 @pytest.mark.slow
 def test_new_kinds_through_the_batch_runner(tmp_path):
     """fields_mc, irregularity_mc and single on a tiny bridge (one span, one car, 10 m run):

@@ -114,3 +114,51 @@ def test_bad_tables_get_the_reference_messages():
         got = outcome(PSDPopulation.from_long_table, bad)
         assert isinstance(expected, str), name      # every case is an error
         assert got == expected, name
+
+
+@pytest.mark.parametrize("band", [None, (10.0, 50.0)])
+def test_pooled_table_gives_back_the_campaigns_population(tmp_path, band):
+    """The pooled table of several campaigns' PSD tables (the study's Monte Carlo population,
+    one file) reads back the population the campaigns' tables give, bit for bit; its band is
+    checked on reading."""
+    from ttbpipe.tipm.population import (pooled_population, read_pooled_population,
+                                         write_pooled_population)
+
+    paths = []
+    for seed, date in ((0, "2025-01-15"), (1, "2025-02-15"), (2, "2024-12-15")):
+        path = tmp_path / f"{date}.parquet"
+        long_table(n_sections=4 + seed, seed=seed).to_parquet(path)
+        paths.append(path)
+    out = tmp_path / "pooled.parquet"
+    written = write_pooled_population(paths, band, out)
+    expected = pooled_population(paths, band)
+    assert same(written, expected)
+    assert list(expected.sections["campaign_date"].unique()) == ["2024-12-15", "2025-01-15",
+                                                                 "2025-02-15"]
+    assert same(read_pooled_population(out, band), expected)
+    assert same(read_pooled_population(out, None if band is None else list(band)), expected)
+    with pytest.raises(ValueError, match="pooled over the wavelength band"):
+        read_pooled_population(out, (2.0, 200.0))
+
+
+def test_bad_pooled_tables_are_refused():
+    table = synthetic_population(3, np.arange(1, 11) / 100.0, np.ones((10, 4)),
+                                 np.random.default_rng(0)).to_pooled_table()
+    assert same(PSDPopulation.from_pooled_table(table), PSDPopulation.from_pooled_table(
+        table.copy()))
+    cases = {
+        "rows out of order": (table.iloc[::-1].reset_index(drop=True), "section-major"),
+        "a row missing": (table.drop(index=[12]).reset_index(drop=True), "section-major"),
+        "another grid": (table.assign(spatial_frequency_per_m=table["spatial_frequency_per_m"]
+                                      .where(table.index != 13, 0.555)), "row 13"),
+        "no channel": (table.drop(columns=[c for c in table.columns if c.endswith("_psd_mm2_m")]),
+                       "PSD columns"),
+        "unknown channel": (table.rename(columns={"gauge_psd_mm2_m": "twist_psd_mm2_m"}),
+                            "twist_psd_mm2_m"),
+        "missing column": (table.drop(columns=["population_section"]), "missing columns"),
+        "NaN value": (table.assign(vertical_psd_mm2_m=table["vertical_psd_mm2_m"]
+                                   .where(table.index != 5)), "not finite"),
+    }
+    for name, (bad, message) in cases.items():
+        with pytest.raises(ValueError, match=message):
+            PSDPopulation.from_pooled_table(bad, source=name)

@@ -1,8 +1,6 @@
 """Snakemake script of rule simulate_batch: one batch of samples (ttbpipe.study.batch)."""
 
-from pathlib import Path
-
-from ttbpipe.io import read_table
+from ttbpipe.io import read_provenance, read_table
 from ttbpipe.logs import setup_logging
 from ttbpipe.study.batch import simulate_batch
 from ttbpipe.study.design import batch_rows
@@ -30,12 +28,12 @@ def main(snakemake) -> None:
     if "profiles" in snakemake.input.keys():
         profiles = {str(rows["kind"].iloc[0]): snakemake.input.profiles}
     if "population" in snakemake.input.keys():   # irregularity_mc (paper case 3's MCM)
-        paths = [str(p) for p in snakemake.input.population]
+        pooled = str(snakemake.input.population)
         # the profile settings of the digest (ttbpipe.study.plan.mc_profile_settings: band,
         # length, step, amplitudes), so that what ran is what the batch path names
         mc = dict(settings.get("mc_profiles") or {})
-        profiles = {"irregularity_mc": {**mc, "psd_paths": paths,
-                                        "date": max(Path(p).stem for p in paths)}}
+        profiles = {"irregularity_mc": {**mc, "pooled_path": pooled,
+                                        "date": max(read_provenance(pooled)["campaigns"])}}
     spans = (snakemake.input.span_frequencies if "span_frequencies" in snakemake.input.keys()
              else None)   # the study's EN 1990 span frequencies, analysed once per study
     simulate_batch(rows, config, profiles, snakemake.output.extremes, snakemake.output.histories,

@@ -73,9 +73,9 @@ def subset_inputs(config: Mapping[str, Any], settings: Mapping[str, Any],
             raise ValueError("study.scenarios.subset.spectrum: population needs the PSD tables of "
                              "the latest campaign's population; pass them, or set spectrum: "
                              "standard to use simulation.irregularity.spectrum")
-        from ..tipm.population import PSDPopulation, load_population
+        from ..tipm.population import pooled_population
 
-        spectrum = PSDPopulation.concat(load_population(list(population_paths), None))
+        spectrum = pooled_population(list(population_paths), None)
     condition = settings["condition"]
     if condition == "none" or config.get("fields") is None:
         config = {k: v for k, v in config.items() if k != "fields"}

@@ -73,11 +73,15 @@ STREAM_MC_PROFILES = streams.STUDY_MC_PROFILES
 
 
 @functools.lru_cache(maxsize=2)
-def _mc_population(paths: tuple[str, ...], band: tuple[float, float] | None):
-    """Pooled PSD population of the Monte Carlo irregularity scenario (cached per process)."""
-    from ..tipm.population import PSDPopulation, load_population
+def _mc_population(paths: tuple[str, ...], pooled_path: str | None,
+                   band: tuple[float, float] | None):
+    """Pooled PSD population of the Monte Carlo irregularity scenario (cached per process): the
+    pooled table when given (the workflow's, one file), else the campaigns' PSD tables."""
+    from ..tipm.population import pooled_population, read_pooled_population
 
-    return PSDPopulation.concat(load_population(list(paths), band))
+    if pooled_path is not None:
+        return read_pooled_population(pooled_path, band)
+    return pooled_population(list(paths), band)
 
 
 def mc_profile(population: Mapping[str, Any], study_seed: int, section: int,
@@ -87,16 +91,19 @@ def mc_profile(population: Mapping[str, Any], study_seed: int, section: int,
     random phases (or Gaussian coefficients, ``amplitudes``) from
     ``profile_rng(seed, date, STREAM_MC_PROFILES, i)``.
 
-    ``population``: {"psd_paths": [...], "wavelength_band_m": [lo, hi], "length_m", "dx_m",
-    "amplitudes" (``tipm.profiles.amplitudes``; missing: the default random phases),
-    "date": the latest campaign}; the profile keys are
-    :func:`ttbpipe.study.plan.mc_profile_settings`.
+    ``population``: {"psd_paths": [...] (the campaigns' PSD tables) or "pooled_path" (their
+    pooled table, :func:`ttbpipe.tipm.population.write_pooled_population`, pooled over the
+    same band), "wavelength_band_m": [lo, hi], "length_m", "dx_m", "amplitudes"
+    (``tipm.profiles.amplitudes``; missing: the default random phases), "date": the latest
+    campaign}; the profile keys are :func:`ttbpipe.study.plan.mc_profile_settings`.
     """
     from ..irregularity.synthesis import DEFAULT_AMPLITUDES
     from ..tipm.profiles import profiles_from_psd_sets
 
     band = population.get("wavelength_band_m")
-    pop = _mc_population(tuple(str(p) for p in population["psd_paths"]),
+    pooled = population.get("pooled_path")
+    pop = _mc_population(tuple(str(p) for p in population.get("psd_paths", ())),
+                         None if pooled is None else str(pooled),
                          None if band is None else tuple(float(b) for b in band))
     if not 0 <= int(section) < pop.n_sections:
         raise ValueError(f"irregularity_mc sample {sample_index}: section {section} outside the "

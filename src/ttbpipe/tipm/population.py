@@ -16,20 +16,26 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ..channels import SPECTRAL_CHANNELS
-from ..io import read_table
+from ..io import read_provenance, read_table, write_table
 
-__all__ = ["PSDPopulation", "load_population", "synthetic_population"]
+__all__ = ["PSDPopulation", "load_population", "pooled_population", "write_pooled_population",
+           "read_pooled_population", "synthetic_population"]
 
 log = logging.getLogger(__name__)
 
 LONG_COLUMNS = ("section", "section_start_m", "section_end_m", "channel",
                 "spatial_frequency_per_m", "psd_mm2_m")
+#: Columns of a pooled population table (:meth:`PSDPopulation.to_pooled_table`) besides one
+#: ``<channel>_psd_mm2_m`` column per channel.
+POOLED_COLUMNS = ("population_section", "campaign_date", "section", "section_start_m",
+                  "section_end_m", "spatial_frequency_per_m")
+POOLED_PSD_SUFFIX = "_psd_mm2_m"
 
 
 @dataclass
@@ -99,6 +105,64 @@ class PSDPopulation:
         index = np.asarray(index, dtype=int)
         return PSDPopulation(self.psd_mm2_m[index], self.frequency_per_m, self.channels,
                              self.sections.iloc[index].reset_index(drop=True))
+
+    def to_pooled_table(self) -> pd.DataFrame:
+        """The population as one table (one row per section and frequency, section-major; one
+        PSD column per channel, ``<channel>_psd_mm2_m``), which :meth:`from_pooled_table` reads
+        back bit for bit. A study's Monte Carlo batches read this one file instead of every
+        campaign's long table and its pivot (about 2 s per batch on paper case 3's 36 campaigns,
+        docs/performance.md)."""
+        n_sec, n_freq, _ = self.psd_mm2_m.shape
+        rows = np.repeat(np.arange(n_sec), n_freq)
+        table = {"population_section": rows,
+                 "campaign_date": pd.Categorical(
+                     self.sections["campaign_date"].astype(str).to_numpy()[rows]),
+                 "section": self.sections["section"].to_numpy()[rows],
+                 "section_start_m": self.sections["section_start_m"].to_numpy()[rows],
+                 "section_end_m": self.sections["section_end_m"].to_numpy()[rows],
+                 "spatial_frequency_per_m": np.tile(self.frequency_per_m, n_sec)}
+        for c, channel in enumerate(self.channels):
+            table[f"{channel}{POOLED_PSD_SUFFIX}"] = self.psd_mm2_m[:, :, c].reshape(-1)
+        return pd.DataFrame(table)
+
+    @classmethod
+    def from_pooled_table(cls, table: pd.DataFrame,
+                          source: str = "pooled PSD table") -> "PSDPopulation":
+        """Population from a table of :meth:`to_pooled_table` (checked: section-major rows, one
+        frequency grid for every section, the channels of :data:`SPECTRAL_CHANNELS`)."""
+        missing = [c for c in POOLED_COLUMNS if c not in table.columns]
+        if missing:
+            raise ValueError(f"{source}: missing columns {missing}; expected {list(POOLED_COLUMNS)} "
+                             f"and one <channel>{POOLED_PSD_SUFFIX} column per channel (a table "
+                             "written by PSDPopulation.to_pooled_table)")
+        channels = tuple(c for c in SPECTRAL_CHANNELS if f"{c}{POOLED_PSD_SUFFIX}" in table.columns)
+        unknown = [c for c in table.columns if c.endswith(POOLED_PSD_SUFFIX)
+                   and c[:-len(POOLED_PSD_SUFFIX)] not in SPECTRAL_CHANNELS]
+        if unknown or not channels:
+            raise ValueError(f"{source}: PSD columns {unknown or 'none'}; expected "
+                             f"<channel>{POOLED_PSD_SUFFIX} for channels of {SPECTRAL_CHANNELS}")
+        section = table["population_section"].to_numpy()
+        frequency = table["spatial_frequency_per_m"].to_numpy(dtype=float)
+        starts = np.flatnonzero(np.r_[True, section[1:] != section[:-1]])
+        n_sec = starts.size
+        n_freq = len(table) // max(n_sec, 1)
+        if (n_sec * n_freq != len(table) or not np.array_equal(section[starts], np.arange(n_sec))
+                or not np.array_equal(np.diff(np.r_[starts, len(table)]),
+                                      np.full(n_sec, n_freq))):
+            raise ValueError(f"{source}: rows are not section-major with one block of "
+                             "frequencies per population_section 0, 1, 2, ...")
+        grid = frequency[:n_freq]
+        if not np.array_equal(frequency.reshape(n_sec, n_freq), np.broadcast_to(grid, (n_sec, n_freq))):
+            bad = int(np.flatnonzero(frequency != np.tile(grid, n_sec))[0])
+            raise ValueError(f"{source}: row {bad}: sections do not share one frequency grid")
+        psd = np.stack([table[f"{c}{POOLED_PSD_SUFFIX}"].to_numpy(dtype=float)
+                        .reshape(n_sec, n_freq) for c in channels], axis=-1)
+        sections = pd.DataFrame({
+            "campaign_date": table["campaign_date"].iloc[starts].astype(str).to_numpy(),
+            "section": table["section"].to_numpy()[starts],
+            "section_start_m": table["section_start_m"].to_numpy()[starts],
+            "section_end_m": table["section_end_m"].to_numpy()[starts]})
+        return cls(psd, grid, channels, sections)
 
     @classmethod
     def from_long_table(cls, table: pd.DataFrame, campaign_date: str = "",
@@ -183,6 +247,37 @@ def load_population(paths: Sequence[str | Path], wavelength_band_m) -> list[PSDP
         pops.append(PSDPopulation.from_long_table(read_table(path), Path(path).stem, band,
                                                   source=str(path)))
     return pops
+
+
+def pooled_population(paths: Sequence[str | Path], wavelength_band_m) -> PSDPopulation:
+    """The sections of every PSD table ``<date>.parquet`` in one population (date order)."""
+    return PSDPopulation.concat(load_population(paths, wavelength_band_m))
+
+
+def write_pooled_population(paths: Sequence[str | Path], wavelength_band_m,
+                            out: str | Path, **provenance: Any) -> PSDPopulation:
+    """Pool the PSD tables ``paths`` (band applied) into one table at ``out`` (written
+    atomically; its provenance names the band and the campaigns, which
+    :func:`read_pooled_population` checks)."""
+    population = pooled_population(paths, wavelength_band_m)
+    band = None if wavelength_band_m is None else [float(b) for b in wavelength_band_m]
+    write_table(population.to_pooled_table(), out, kind="pooled_psd_population",
+                wavelength_band_m=band,
+                campaigns=sorted(set(population.sections["campaign_date"].astype(str))),
+                **provenance)
+    return population
+
+
+def read_pooled_population(path: str | Path, wavelength_band_m) -> PSDPopulation:
+    """The population of :func:`write_pooled_population`'s table, which must have been pooled
+    over ``wavelength_band_m`` (the same frequencies :func:`load_population` would keep)."""
+    written = read_provenance(path).get("wavelength_band_m")
+    wanted = None if wavelength_band_m is None else [float(b) for b in wavelength_band_m]
+    if written != wanted:
+        raise ValueError(f"{path}: pooled over the wavelength band {written} m, the study asks "
+                         f"for {wanted} m; pool the PSD tables again with the study's psd."
+                         "wavelength_band_m (workflow rule study_mc_population)")
+    return PSDPopulation.from_pooled_table(read_table(path), source=str(path))
 
 
 def synthetic_population(n_sections: int, frequency_per_m: np.ndarray, mean_psd: np.ndarray,

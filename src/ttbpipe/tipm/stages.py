@@ -21,7 +21,7 @@ from ..io import read_table
 from .distribution import (FIT_COLUMNS, MIN_SECTIONS_FOR_FIT, SUMMARY_COLUMNS,
                            fit_ordinate_distributions, summarize_fits)
 from .evolution import SpectralEvolution, forecast_coverage
-from .population import PSDPopulation, load_population
+from .population import PSDPopulation, load_population, pooled_population
 from .profiles import (STREAM_FORECAST, STREAM_MONTE_CARLO, STREAM_REPRESENTATIVE, date_key,
                        profiles_from_psd_sets)
 from .selection import TIPMSelection, TIPMSelector, selection_metrics
@@ -68,7 +68,7 @@ def select_stage(psd_paths: Sequence[str | Path], tipm: Mapping[str, Any], psd: 
                  ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
     """(representative PSD long table with weights, weights table, fidelity metrics)."""
     cfg = resolve_config(tipm)
-    population = PSDPopulation.concat(load_population(psd_paths, psd.get("wavelength_band_m")))
+    population = pooled_population(psd_paths, psd.get("wavelength_band_m"))
     selection = selector_from_config(cfg).select(population)
     metrics = selection_metrics(population, selection)
     for row in metrics.itertuples():
@@ -95,7 +95,7 @@ def profiles_stage(selection_table: pd.DataFrame, weights: pd.DataFrame, date: s
 def distribution_stage(psd_paths: Sequence[str | Path], psd: Mapping[str, Any]
                        ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(per-frequency fits, per-channel-and-band summary) of a campaign's population."""
-    population = PSDPopulation.concat(load_population(psd_paths, psd.get("wavelength_band_m")))
+    population = pooled_population(psd_paths, psd.get("wavelength_band_m"))
     if population.n_sections < MIN_SECTIONS_FOR_FIT:
         log.warning("population of %d sections: fewer than %d, no distribution fit (empty tables); "
                     "later campaigns enlarge the population", population.n_sections,
