@@ -156,6 +156,7 @@ def test_bad_pooled_tables_are_refused():
         "unknown channel": (table.rename(columns={"gauge_psd_mm2_m": "twist_psd_mm2_m"}),
                             "twist_psd_mm2_m"),
         "missing column": (table.drop(columns=["population_section"]), "missing columns"),
+        "no rows": (table.iloc[:0], "no rows"),
         "NaN value": (table.assign(vertical_psd_mm2_m=table["vertical_psd_mm2_m"]
                                    .where(table.index != 5)), "not finite"),
     }

@@ -132,28 +132,31 @@ class PSDPopulation:
         frequency grid for every section, the channels of :data:`SPECTRAL_CHANNELS`)."""
         missing = [c for c in POOLED_COLUMNS if c not in table.columns]
         if missing:
-            raise ValueError(f"{source}: missing columns {missing}; expected {list(POOLED_COLUMNS)} "
-                             f"and one <channel>{POOLED_PSD_SUFFIX} column per channel (a table "
-                             "written by PSDPopulation.to_pooled_table)")
+            raise ValueError(f"{source}: missing columns {missing}; expected "
+                             f"{list(POOLED_COLUMNS)} and one <channel>{POOLED_PSD_SUFFIX} "
+                             "column per channel (a table of PSDPopulation.to_pooled_table)")
         channels = tuple(c for c in SPECTRAL_CHANNELS if f"{c}{POOLED_PSD_SUFFIX}" in table.columns)
         unknown = [c for c in table.columns if c.endswith(POOLED_PSD_SUFFIX)
                    and c[:-len(POOLED_PSD_SUFFIX)] not in SPECTRAL_CHANNELS]
         if unknown or not channels:
             raise ValueError(f"{source}: PSD columns {unknown or 'none'}; expected "
                              f"<channel>{POOLED_PSD_SUFFIX} for channels of {SPECTRAL_CHANNELS}")
+        if table.empty:
+            raise ValueError(f"{source}: no rows (a population without sections)")
         section = table["population_section"].to_numpy()
         frequency = table["spatial_frequency_per_m"].to_numpy(dtype=float)
         starts = np.flatnonzero(np.r_[True, section[1:] != section[:-1]])
         n_sec = starts.size
-        n_freq = len(table) // max(n_sec, 1)
+        n_freq = len(table) // n_sec
         if (n_sec * n_freq != len(table) or not np.array_equal(section[starts], np.arange(n_sec))
                 or not np.array_equal(np.diff(np.r_[starts, len(table)]),
                                       np.full(n_sec, n_freq))):
             raise ValueError(f"{source}: rows are not section-major with one block of "
                              "frequencies per population_section 0, 1, 2, ...")
         grid = frequency[:n_freq]
-        if not np.array_equal(frequency.reshape(n_sec, n_freq), np.broadcast_to(grid, (n_sec, n_freq))):
-            bad = int(np.flatnonzero(frequency != np.tile(grid, n_sec))[0])
+        other_grid = frequency != np.tile(grid, n_sec)
+        if other_grid.any():
+            bad = int(np.flatnonzero(other_grid)[0])
             raise ValueError(f"{source}: row {bad}: sections do not share one frequency grid")
         psd = np.stack([table[f"{c}{POOLED_PSD_SUFFIX}"].to_numpy(dtype=float)
                         .reshape(n_sec, n_freq) for c in channels], axis=-1)
