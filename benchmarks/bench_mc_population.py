@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import json
 import subprocess
 import sys
 import tempfile
@@ -39,8 +40,6 @@ def main() -> None:
     parser.add_argument("root", type=Path)
     parser.add_argument("--rounds", type=int, default=3)
     args = parser.parse_args()
-
-    import json
 
     from ttbpipe.study.plan import mc_profile_settings
     from ttbpipe.tipm.population import write_pooled_population

@@ -4,7 +4,8 @@
 
 ROOT: a clone in which `snakemake --cores 2 --configfile config/case3.yaml` has written at least
 the Monte Carlo design, the PSD tables and the span frequencies (results/case3/study/design/mc.parquet,
-results/case3/psd/*.parquet, results/case3/study/span_frequencies.json). Runs the design's first
+results/case3/psd/*.parquet, results/case3/study/span_frequencies.json; the pooled population
+results/case3/study/mc_population.parquet is read where it exists, as the batches do). Runs the design's first
 sample as a warm-up (population, structure, numba cache), then the next ``--samples`` ones
 through `ttbpipe.study.samples.run_sample` as a batch does, with `time.perf_counter` timers
 wrapped around its stages (profile, set-up, static state, train model, time loop, results table,
@@ -70,8 +71,11 @@ def main() -> None:
     update_config(config, yaml.safe_load((root / "config/case3.yaml").read_text()))
     design = read_table(root / "results/case3/study/design/mc.parquet")
     paths = sorted(glob.glob(str(root / "results/case3/psd/*.parquet")))
-    profiles = {"irregularity_mc": {**mc_profile_settings(config), "psd_paths": paths,
-                                    "date": max(Path(p).stem for p in paths)}}
+    population = {**mc_profile_settings(config), "date": max(Path(p).stem for p in paths)}
+    pooled = root / "results/case3/study/mc_population.parquet"
+    # the pooled table where the workflow wrote it, as a batch reads it; else the 36 tables
+    population.update({"pooled_path": str(pooled)} if pooled.is_file() else {"psd_paths": paths})
+    profiles = {"irregularity_mc": population}
     kwargs = _sample_kwargs(config, profiles, root / "results/case3/study/span_frequencies.json")
     rows = design.sort_values("sample_index").to_dict("records")
     samples.run_sample(rows[0], **kwargs)
