@@ -112,3 +112,51 @@ def test_static_signs_follow_axes():
     from ttbpipe.structure.monitors import point_rows
     d, c = point_rows(m, {"kind": "slab", "x_m": x})["roll"]
     assert float(u[np.asarray(d)] @ c) < 0
+
+
+def _dense_triple_forces(packed, disp, vel):
+    """Slow reference of the link triples: every entry with its three coefficients, in the
+    assembled order (the kernel's form before it skipped the zero coefficients)."""
+    force = np.zeros(packed.n_dof)
+    coef = packed.tri_coef.reshape(-1, 3)
+    for t in range(packed.tri_k.size // 3):
+        j0, j1 = packed.tri_ptr[t], packed.tri_ptr[t + 1]
+        d = np.zeros(3)
+        v = np.zeros(3)
+        for j in range(j0, j1):
+            for r in range(3):
+                d[r] += coef[j, r] * disp[packed.tri_dof[j]]
+                v[r] += coef[j, r] * vel[packed.tri_dof[j]]
+        p = packed.tri_k[3 * t:3 * t + 3] * d + packed.tri_c[3 * t:3 * t + 3] * v
+        for j in range(j0, j1):
+            force[packed.tri_dof[j]] -= (coef[j, 0] * p[0] + coef[j, 1] * p[1]) + coef[j, 2] * p[2]
+    return force
+
+
+def test_triple_kernel_skips_only_zero_coefficients(model):
+    """The CA mortar's triples read in groups (vertical only, lateral and roll only, general;
+    ``group_triple_entries``) give the dense evaluation's forces bit for bit; with entries in
+    the general group (coefficients made non-zero at random) equal to rounding (1e-12 of the
+    largest force), as the terms of a sum are then added in another order."""
+    from ttbpipe.structure.kernels import _EVERY_ELEMENT, _triple_forces, group_triple_entries
+
+    packed = model.packed
+    coef = packed.tri_coef.reshape(-1, 3)
+    assert packed.tri_k.size > 0 and (coef == 0.0).mean() > 0.5     # the case worth skipping
+    rng = np.random.default_rng(7)
+    u, v = rng.normal(size=packed.n_dof), rng.normal(size=packed.n_dof)
+    force = np.zeros(packed.n_dof)
+    _triple_forces(packed, u, v, force, _EVERY_ELEMENT, 1)
+    assert np.array_equal(force, _dense_triple_forces(packed, u, v))
+
+    mixed = coef.copy()
+    fill = rng.random(mixed.shape) < 0.2
+    mixed[fill] = rng.normal(size=fill.sum())
+    group_end, kdof, kcoef = group_triple_entries(packed.tri_ptr, packed.tri_dof, mixed.ravel())
+    general = packed._replace(tri_coef=mixed.ravel(), tri_group_end=group_end,
+                              tri_kernel_dof=kdof, tri_kernel_coef=kcoef)
+    assert (group_end[1::2] < packed.tri_ptr[1:]).any()        # the general group is used
+    force = np.zeros(packed.n_dof)
+    _triple_forces(general, u, v, force, _EVERY_ELEMENT, 1)
+    ref = _dense_triple_forces(general, u, v)
+    assert np.max(np.abs(force - ref)) <= 1e-12 * np.max(np.abs(ref))

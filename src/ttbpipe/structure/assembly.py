@@ -25,7 +25,7 @@ from .carriers import (CARRIER_PARAMETERS, PARAMETER_CARRIER, carrier_positions,
                        nominal_properties)
 from .damping import girder_damping_ratio
 from .girder import SpanReduction, hermite_shape, reduce_span
-from .kernels import StructurePacked
+from .kernels import StructurePacked, group_triple_entries
 from .layout import Layout, make_layout
 from .pier import PierReduction, pier_from_config
 from .plan import PLACEMENTS, plan_eccentricity_m, span_is_curved
@@ -526,6 +526,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         Kf.append(red.K.ravel()); Cf.append(red.C.ravel()); Mi.append(minv.ravel())
     ptr, ldof, lcoef, lk, lc = links.arrays()
     tptr, tdof, tcoef, tk, tc = links.triple_arrays()
+    tri_group_end, tri_kernel_dof, tri_kernel_coef = group_triple_entries(tptr, tdof, tcoef)
     pad_all = pads["slab"] + pads["ballasted"] + pads["rigid"]
     pad_int = lambda col: np.array([q[col] for q in pad_all], dtype=np.int64)  # noqa: E731
     pad_flt = lambda col: (np.array([q[col] for q in pad_all], dtype=float).ravel()  # noqa: E731
@@ -557,6 +558,8 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         bal_c=np.array([bal["ballast_cz_Ns_m"], bal["subgrade_c_Ns_m"], bal["shear_c_Ns_m"],
                         bal["ballast_cy_Ns_m"]], dtype=float),
         bal_half_gauge=half_gauge,
+        tri_group_end=tri_group_end, tri_kernel_dof=tri_kernel_dof,
+        tri_kernel_coef=tri_kernel_coef,
     )
     info = dict(off, n_diag=n_diag, n_dof=n_dof, span_dof0=span_dof0, n_piers=n_piers,
                 pier_top_dof0=pier_top_dof0, block_dof0=block_dof0,
