@@ -25,7 +25,8 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
+
+from .jit import kernel
 
 #: Pass-band edge (fraction of the output Nyquist frequency), stop-band attenuation (dB).
 PASS_FRACTION = 0.8
@@ -59,7 +60,7 @@ def decimator(n_channels: int, n_out: int, out_every: int) -> Decimator:
                      int(out_every), (taps.size - 1) // 2, np.zeros((n_out, n_channels)))
 
 
-@njit(cache=True)
+@kernel
 def _emit(dec, newest):
     """Write the next output row: the filter output centred ``delay`` samples behind sample
     ``newest`` (the row's own time)."""
@@ -78,7 +79,7 @@ def _emit(dec, newest):
     dec.state[2] = row + 1
 
 
-@njit(cache=True)
+@kernel
 def push(dec, values):
     """Push the next sample of every channel; write the output row that becomes due.
 
@@ -101,7 +102,7 @@ def push(dec, values):
         _emit(dec, s)
 
 
-@njit(cache=True)
+@kernel
 def flush(dec):
     """After the last step: hold the last sample until every output row is written."""
     n_taps = dec.taps.shape[0]

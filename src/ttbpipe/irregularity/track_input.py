@@ -21,9 +21,9 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
-from numba import njit
 
 from ..channels import rails_from_spectral
+from ..jit import kernel
 
 #: Rail inputs (m) on a uniform grid starting at x0 with step dx: values[channel, i] and their
 #: x-derivatives slopes[channel, i], channels z_left, z_right, y_left, y_right.
@@ -123,7 +123,7 @@ def build_irregularity(cfg: Mapping[str, Any] | None, x_start: float, x_end: flo
                         np.ascontiguousarray(slopes))
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def irregularity_at(track, channel, x):
     """Value and x-derivative of rail input ``channel`` at x (linear interpolation; 0 outside)."""
     s = (x - track.x0) / track.dx

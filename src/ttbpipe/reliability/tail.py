@@ -58,9 +58,9 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
-from numba import njit
 from scipy import optimize, stats
 
+from ..jit import kernel
 from ..stats.tables import weighted_quantile
 from .result import reliability_index
 
@@ -188,7 +188,7 @@ def _log1p_ratio(xi: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 # --- negative log-likelihoods (the optimisers' objective; the models' ``logf`` is the reference) --
 
-@njit(cache=True)
+@kernel
 def _log1p_over_xi(xi, y):
     """``log(1 + xi y) / xi`` (``y`` at |xi| < _XI_ZERO), NaN outside the support 1 + xi y > 0:
     :func:`_log1p_ratio` for one value."""
@@ -200,7 +200,7 @@ def _log1p_over_xi(xi, y):
     return np.log1p(t) / xi
 
 
-@njit(cache=True)
+@kernel
 def _gev_nll(x, a, mu, lsig, xi):
     """``-sum a_i log f(x_i)`` of the GEV (Coles 2001 eq. 3.7; Gumbel limit eq. 3.9 below
     |xi| = _XI_ZERO); +inf where an x_i lies outside the support. Same terms as
@@ -216,13 +216,13 @@ def _gev_nll(x, a, mu, lsig, xi):
     return total if np.isfinite(total) else np.inf
 
 
-@njit(cache=True)
+@kernel
 def _log1p_exp(z):
     """log(1 + e^z) without overflow (numpy's ``logaddexp(0, z)``)."""
     return max(z, 0.0) + np.log1p(np.exp(-abs(z)))
 
 
-@njit(cache=True)
+@kernel
 def _pot_nll(above, e, a, eta, lsig, xi):
     """``-sum a_i log f_i`` of peaks over a threshold: the binomial term of zeta = 1/(1 + e^-eta)
     for every point and the GPD of the excesses ``e`` above it (Coles 2001 eq. 4.10); +inf
@@ -251,7 +251,7 @@ _PROFILE = 3
 _NO_FLAGS, _NO_VALUES = np.zeros(0, dtype=np.bool_), np.zeros(0)
 
 
-@njit(cache=True)
+@kernel
 def _shape_nll(kind, x, a, above, e, xi_min, first, lsig, xi):
     """The GEV (``first`` = mu) or POT (``first`` = eta) negative log-likelihood, +inf outside
     the shape's range ``[xi_min, 5)`` (the optimiser's parameter space)."""
@@ -262,7 +262,7 @@ def _shape_nll(kind, x, a, above, e, xi_min, first, lsig, xi):
     return _pot_nll(above, e, a, first, lsig, xi)
 
 
-@njit(cache=True)
+@kernel
 def _objective(kind, x, a, above, e, xi_min, u, lp, z, v):
     """The objective ``kind`` at ``v``: a model's negative log-likelihood (theta = v), or its
     profile at ``log p = lp`` of exceeding ``z`` (v the free parameters; the models'
@@ -296,20 +296,20 @@ def _objective(kind, x, a, above, e, xi_min, u, lp, z, v):
 _NM_REFLECT, _NM_EXPAND, _NM_OUTSIDE, _NM_INSIDE, _NM_SHRINK = 0, 1, 2, 3, 4
 
 
-@njit(cache=True)
+@kernel
 def _nm_less(f1, f2):
     """numpy's sort order of floats: NaN after every number."""
     return f1 < f2 or (f2 != f2 and f1 == f1)
 
 
-@njit(cache=True)
+@kernel
 def _nm_set(sim, row, values):
     """``sim[row] = values`` as a loop (numba compiles loops faster than array expressions)."""
     for k in range(values.shape[0]):
         sim[row, k] = values[k]
 
 
-@njit(cache=True)
+@kernel
 def _nm_sort(sim, fsim):
     """Both arrays in ascending order of ``fsim`` by a stable insertion sort: the order of
     ``np.argsort`` (numpy sorts arrays this short by insertion), so ties keep their places."""
@@ -330,7 +330,7 @@ def _nm_sort(sim, fsim):
             sim[j + 1, k] = row[k]
 
 
-@njit(cache=True)
+@kernel
 def _nelder_mead(kind, x, a, above, e, xi_min, u, lp, z, x0, xatol, fatol, maxiter,
                  maxfev):
     """Minimise the objective ``kind`` (:func:`_objective`) from ``x0`` by Nelder & Mead's

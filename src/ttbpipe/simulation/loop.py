@@ -23,9 +23,9 @@ from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ..irregularity.track_input import irregularity_at
+from ..jit import kernel
 from ..structure.kernels import structure_accelerations, windowed_structure_accelerations
 from ..structure.monitors import no_monitors, record_monitors
 from ..structure.rail_mesh import add_rail_contact_load, add_rail_head_load, rail_point_kinematics
@@ -52,7 +52,7 @@ CoupledState = namedtuple("CoupledState", ["q", "v", "a", "a_prev", "disp", "vel
                                            "acc_prev", "nodal_force"])
 
 
-@njit(cache=True)
+@kernel
 def track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin):
     """rail_kin[ws, side] = (z, dz/dt, y, dy/dt, theta, dtheta/dt) of the rail head under every
     wheel: the structure's (rail head moved by the roll theta) plus the irregularity of that
@@ -62,7 +62,7 @@ def track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin):
     placed_track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin, 0, 1)
 
 
-@njit(cache=True)
+@kernel
 def placed_track_kinematics(mesh, track, disp, vel, ws_s, speed, rail_kin, rail0, direction):
     """:func:`track_kinematics` of a train on the track whose left rail is ``rail0`` (track k:
     rail 2k), running in ``direction`` +1 (+x) or -1 (-x), in the train's own axes.
@@ -106,7 +106,7 @@ def placed_track_kinematics(mesh, track, disp, vel, ws_s, speed, rail_kin, rail0
                     rail_kin[w, k, 5] = -vr
 
 
-@njit(cache=True)
+@kernel
 def add_wheel_loads(mesh, wheel, ws_s, rail0, direction, two_point, nodal_force):
     """Add to ``nodal_force`` the loads of a train's wheels on its rails: the opposite of the
     force of the rail on each wheel (``wheel``: the contact table in the train's axes), with
@@ -143,7 +143,7 @@ PlacedTrain = namedtuple("PlacedTrain", ["vehicle", "track", "speed", "creep_rel
                                          "direction"])
 
 
-@njit(cache=True)
+@kernel
 def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale):
     """One train at time t: its rail kinematics, accelerations (``state.a``) and wheel table
     (``work.wheel``); adds its wheel loads to ``state.nodal_force``. ``creep_scale``: 0.0 at the
@@ -162,7 +162,7 @@ def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale):
                     vehicle.zones.shape[0] > 0, state.nodal_force)
 
 
-@njit(cache=True)
+@kernel
 def _move_window(t, state, placed, window):
     """The track window (:mod:`ttbpipe.structure.window`) over the train's wheelsets at time t."""
     if window.n_segments == 0:
@@ -176,7 +176,7 @@ def _move_window(t, state, placed, window):
     update_window(window, x_low, x_high, state.vel, state.acc, state.acc_prev)
 
 
-@njit(cache=True)
+@kernel
 def _evaluate(t, state, placed, work, packed, window, mesh, ws_x, rail_kin, creep_scale):
     """Accelerations of train and structure at time t for the current displacements and
     velocities (``work.wheel``: the wheel table of this evaluation; :func:`_train_loads`), the
@@ -190,7 +190,7 @@ def _evaluate(t, state, placed, work, packed, window, mesh, ws_x, rail_kin, cree
                                      state.acc)
 
 
-@njit(cache=True)
+@kernel
 def _advance(u, v, a, a_prev, dt, psi):
     """Zhai's predictor for one system (displacements and velocities at the new step from this
     and the previous step's accelerations; :func:`ttbpipe.timestepping.zhai.zhai_predict`),
@@ -200,7 +200,7 @@ def _advance(u, v, a, a_prev, dt, psi):
         a_prev[i] = a[i]
 
 
-@njit(cache=True)
+@kernel
 def _coupled_loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_every):
     """Zhai explicit integration of train + structure; returns (status, step).
 
@@ -250,7 +250,7 @@ def _coupled_loop(state, placed, packed, window, mesh, monitors, train, dt, n_st
     return 0, n_steps
 
 
-@njit(cache=True)
+@kernel
 def _evaluate_pair(t, state, state_b, placed, placed_b, work, work_b, packed, mesh, scratch,
                    creep_scale):
     """Accelerations of two trains and the structure at time t (``state_b`` shares the
@@ -264,7 +264,7 @@ def _evaluate_pair(t, state, state_b, placed, placed_b, work, work_b, packed, me
     structure_accelerations(packed, state.disp, state.vel, nodal_force, state.acc)
 
 
-@njit(cache=True)
+@kernel
 def _coupled_loop_pair(state, state_b, placed, placed_b, packed, mesh, monitors, recorders,
                        dt, n_steps, out_every):
     """:func:`_coupled_loop` with two trains on the structure (the two blocks of one

@@ -21,9 +21,9 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
 from ..decimation import push
+from ..jit import kernel
 
 #: Train records of a run with ``n_out`` output rows (see :func:`train_recorder`):
 #: t_out[row]; wheel_hist[row, ws, side] = (F_x, F_y, F_z, y_rel, N) sampled; q_hist, a_hist[row,
@@ -85,7 +85,7 @@ def decimated(rec: TrainRecorder, n_monitors: int) -> dict[str, np.ndarray]:
             "acc": out[:, b:c], "disp": out[:, c:]}
 
 
-@njit(cache=True)
+@kernel
 def record_step_channels(rec, monitor_values, wheel, q, a):
     """Push this step's decimated channels (monitors, wheel forces, vehicle DOFs)."""
     values = rec.values
@@ -107,7 +107,7 @@ def record_step_channels(rec, monitor_values, wheel, q, a):
     push(rec.dec, values)
 
 
-@njit(cache=True)
+@kernel
 def derailment_coefficient(lateral_force, vertical_force, in_contact):
     """Q/P = |lateral| / vertical wheel-rail force, defined in contact only (0 off the rail: a
     lifted wheel with a flange force would give |Q|/0); the one formula of the loop's peaks and
@@ -117,7 +117,7 @@ def derailment_coefficient(lateral_force, vertical_force, in_contact):
     return 0.0
 
 
-@njit(cache=True)
+@kernel
 def derailment_coefficients(lateral_force, vertical_force, in_contact):
     """:func:`derailment_coefficient` over arrays (the table's Q/P columns)."""
     out = np.zeros(lateral_force.shape[0])
@@ -126,7 +126,7 @@ def derailment_coefficients(lateral_force, vertical_force, in_contact):
     return out
 
 
-@njit(cache=True)
+@kernel
 def record_wheel_step(rec, wheel, step):
     """Peaks and contact loss of one step (module docstring); returns the number of wheels in
     contact."""
@@ -166,7 +166,7 @@ def record_wheel_step(rec, wheel, step):
     return in_contact
 
 
-@njit(cache=True)
+@kernel
 def record_vehicle_output(rec, row, t, q, a):
     """The vehicle's displacements and accelerations of one output step; returns (finite, the
     largest |displacement| over ``rec.displacement_dofs``), for the loop's divergence checks."""
@@ -182,7 +182,7 @@ def record_vehicle_output(rec, row, t, q, a):
     return True, big
 
 
-@njit(cache=True)
+@kernel
 def record_wheel_output(rec, row, wheel):
     """The wheel forces of one output step (:data:`WHEEL_HISTORY_COLUMNS`)."""
     for w in range(wheel.shape[0]):

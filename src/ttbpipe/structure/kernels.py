@@ -24,8 +24,8 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
+from ..jit import kernel
 from .shape_functions import hermite
 
 StructurePacked = namedtuple("StructurePacked", [
@@ -57,14 +57,14 @@ StructurePacked.__new__.__defaults__ = (
 _ONE, _TWO, _THREE = np.uint64(1), np.uint64(2), np.uint64(3)
 
 
-@njit(cache=True)
+@kernel
 def _element_span(ranges, k, n):
     """Row k of element ``ranges`` as unsigned [start, end) (end -1: ``n``)."""
     end = ranges[k, 1]
     return np.uint64(ranges[k, 0]), np.uint64(end if end >= 0 else n)
 
 
-@njit(cache=True)
+@kernel
 def _beam_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the elastic forces K_e u_e of every beam element (rails and slab) from ``force``.
 
@@ -101,7 +101,7 @@ def _beam_forces(packed, disp, vel, force, ranges, n_ranges):
             force[b + 4] += kt
 
 
-@njit(cache=True)
+@kernel
 def _link_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every spring-damper link from ``force``.
 
@@ -156,7 +156,7 @@ def group_triple_entries(tri_ptr, tri_dof, tri_coef):
     return group_end, np.ascontiguousarray(tri_dof[order]), np.ascontiguousarray(coef[order].ravel())
 
 
-@njit(cache=True)
+@kernel
 def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every link triple (CA quadrature points; rail pads and ballast have
     compact kernels of their own).
@@ -229,7 +229,7 @@ def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
                 force[dofs[j]] -= coef[3 * j] * p0 + coef[3 * j + 1] * p1 + coef[3 * j + 2] * p2
 
 
-@njit(cache=True)
+@kernel
 def _pad_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every rail pad (fastener): vertical, lateral and roll spring-dampers
     between a rail node and its seat (paper eq. 22).
@@ -326,7 +326,7 @@ def _pad_forces(packed, disp, vel, force, ranges, n_ranges):
                 force[sd + 2] += e * pz + pr
 
 
-@njit(cache=True)
+@kernel
 def _ballast_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of the ballasted track under the rails (Zhai's model; paper 2.1 (2)).
 
@@ -373,7 +373,7 @@ def _ballast_forces(packed, disp, vel, force, ranges, n_ranges):
 _EVERY_ELEMENT = np.array([[0, -1]], dtype=np.int64)
 
 
-@njit(cache=True)
+@kernel
 def structure_accelerations(packed, disp, vel, nodal_force, acc_out):
     """acc_out = M^-1 (nodal_force - K disp - C vel) for the whole structure.
 
@@ -384,7 +384,7 @@ def structure_accelerations(packed, disp, vel, nodal_force, acc_out):
                    _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1)
 
 
-@njit(cache=True)
+@kernel
 def windowed_structure_accelerations(packed, window, disp, vel, nodal_force, acc_out):
     """:func:`structure_accelerations` with the track outside a window frozen
     (:mod:`ttbpipe.structure.window`): only the elements in the window's ranges are evaluated
@@ -399,7 +399,7 @@ def windowed_structure_accelerations(packed, window, disp, vel, nodal_force, acc
                    window.ballast_ranges, n[3], window.triple_ranges, n[4])
 
 
-@njit(cache=True)
+@kernel
 def _accelerations(packed, disp, vel, nodal_force, acc_out, inv_mass, beams, n_beams, links,
                    n_links, pads, n_pads, ballast, n_ballast, triples, n_triples):
     """The accelerations with the given diagonal inverse mass, evaluating the elements in the

@@ -29,9 +29,9 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
-from numba import njit
 
 from ..decimation import decimator, flush, push
+from ..jit import kernel
 from ..timestepping.limits import check_time_step, stable_time_step
 from ..timestepping.zhai import zhai_predict
 from .kernels import structure_accelerations
@@ -219,7 +219,7 @@ LoadArrays = namedtuple("LoadArrays", ["rail", "x0", "speed", "F0", "F1", "freq"
 StructureState = namedtuple("StructureState", ["disp", "vel", "acc", "acc_prev", "nodal_force"])
 
 
-@njit(cache=True)
+@kernel
 def _moving_load_loop(packed, mesh, loads, state, rec, dec, dt, n_steps, blowup_m):
     """Zhai time loop with moving point loads on the rails; records the monitors at every step
     into the anti-alias decimator ``dec`` (its rows: t = k out_every dt).

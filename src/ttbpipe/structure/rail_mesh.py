@@ -26,8 +26,8 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
+from ..jit import kernel
 from .shape_functions import hermite
 
 #: n_rails (0, 2, or 4 on a double-track deck: track k has rails 2k, 2k + 1), first node x0 (m),
@@ -70,7 +70,7 @@ def rail_inverse_masses(mesh: RailMesh, inv_mass: np.ndarray) -> tuple[float, fl
     return z_max, y_max
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _locate(mesh, x):
     """Element index and local coordinate xi in [0, 1] of abscissa x; (-1, 0) outside."""
     n_el = mesh.n_nodes - 1
@@ -85,7 +85,7 @@ def _locate(mesh, x):
     return e, s - e
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def rail_point_kinematics(mesh, rail, x, disp, vel):
     """(z, dz/dt, y, dy/dt, roll, droll/dt) of rail ``rail``'s shear centre at x (zeros outside)."""
     e, xi = _locate(mesh, x)
@@ -103,7 +103,7 @@ def rail_point_kinematics(mesh, rail, x, disp, vel):
     return z, vz, y, vy, r, vr
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def rail_head_kinematics(mesh, rail, x, disp, vel):
     """(z, dz/dt, y, dy/dt) of rail ``rail``'s head at x: the shear centre's, the lateral ones
     moved up by the head height under the roll (y - h roll)."""
@@ -112,7 +112,7 @@ def rail_head_kinematics(mesh, rail, x, disp, vel):
     return z, vz, y - h * r, vy - h * vr
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def add_rail_point_load(mesh, rail, x, fz, fy, mx, nodal_force):
     """Add the consistent nodal loads of (Fz, Fy, Mx) at x on rail ``rail``'s shear centre
     (transpose of :func:`rail_point_kinematics`); nothing outside the rails."""
@@ -134,14 +134,14 @@ def add_rail_point_load(mesh, rail, x, fz, fy, mx, nodal_force):
     nodal_force[b + 4] += xi * mx
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def add_rail_contact_load(mesh, rail, x, fz, fy, mx, nodal_force):
     """:func:`add_rail_head_load` plus a moment ``mx`` about the shear centre (e.g. of a vertical
     force acting off the rail's axis, F_z l_h: seed paper eq. 31)."""
     add_rail_point_load(mesh, rail, x, fz, fy, -mesh.head_height * fy + mx, nodal_force)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def add_rail_head_load(mesh, rail, x, fz, fy, nodal_force):
     """Add (Fz, Fy) acting on rail ``rail``'s head at x: the lateral force's lever h about the
     shear centre gives the moment -h Fy (transpose of :func:`rail_head_kinematics`)."""

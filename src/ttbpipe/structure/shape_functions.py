@@ -11,10 +11,11 @@ monitors all use this function, in numba kernels and in Python alike; the thin-p
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..jit import kernel
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def hermite(xi, L):
     """(N1, N2, N3, N4) at local coordinate ``xi`` of an element of length ``L``."""
     xi2 = xi * xi

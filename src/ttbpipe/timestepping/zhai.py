@@ -15,11 +15,12 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from numba import njit
 from scipy import sparse
 
+from ..jit import kernel
 
-@njit(cache=True)
+
+@kernel
 def zhai_predict(disp, vel, acc, acc_prev, dt, psi, phi):
     """Zhai's explicit two-step update of displacement and velocity, in place.
 

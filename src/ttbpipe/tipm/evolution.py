@@ -37,8 +37,8 @@ from typing import Iterator, Sequence
 
 import numpy as np
 import pandas as pd
-from numba import njit
 
+from ..jit import kernel
 from .population import PSDPopulation
 
 __all__ = ["SpectralEvolution", "matched_transitions", "forecast_coverage", "PARTITION_SCALES"]
@@ -71,7 +71,7 @@ def matched_transitions(populations: Sequence[PSDPopulation]) -> list[tuple[np.n
     return pairs
 
 
-@njit(cache=True)
+@kernel
 def _step_kernel(state, p, edges, quantiles, floor, out):
     """One step of eq. 54 for ``state[n, F, C]`` with index ``p[n]``: out = max(state +
     F⁻¹_{f,c,g(state)}(p), floor), F⁻¹ linearly interpolated on the uniform probability grid of

@@ -46,9 +46,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from numba import njit
 from scipy import stats
 
+from ..jit import kernel
 from .population import PSDPopulation
 
 __all__ = ["TIPMSelector", "TIPMSelection", "selection_metrics", "equal_probability_bin_means"]
@@ -64,7 +64,7 @@ _ANNEAL_T0 = 0.05
 _ANNEAL_MEAN_WEIGHT = 0.01
 
 
-@njit(cache=True)
+@kernel
 def _sorted_misfit(sorted_values, targets, inv_scale, mean_weight):
     """max_{j,c} |sorted_values[j,c] - targets[j,c]| inv_scale[c] + mean_weight * mean of the same."""
     m, c = sorted_values.shape
@@ -79,7 +79,7 @@ def _sorted_misfit(sorted_values, targets, inv_scale, mean_weight):
     return largest + mean_weight * total / (m * c)
 
 
-@njit(cache=True)
+@kernel
 def _replace_in_sorted(column, old, new, out):
     """``out`` = sorted ``column`` with one occurrence of ``old`` replaced by ``new`` (O(M))."""
     m = column.size
@@ -101,7 +101,7 @@ def _replace_in_sorted(column, old, new, out):
         out[i_out] = new
 
 
-@njit(cache=True)
+@kernel
 def _anneal_strata(values, member_start, members, chosen, targets, inv_scale, n_iter, t0,
                    mean_weight, seed):
     """Simulated annealing of one member per stratum against per-channel sorted targets.

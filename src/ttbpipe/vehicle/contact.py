@@ -61,10 +61,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
+from ..jit import kernel
 from .parameters import CREEP_LAWS, ContactParameters, check_creep_law
 
 log = logging.getLogger(__name__)
@@ -108,7 +108,7 @@ def hertz_g(wheel_radius: float, tread: str = "cone") -> float:
     raise ValueError(f"tread must be 'cone' or 'worn', got {tread!r}")
 
 
-@njit(cache=True)
+@kernel
 def _hertz_force(penetration: float, g: float) -> float:
     """Hertz normal force (N) for a penetration (m); 0 when the wheel has left the rail."""
     if penetration <= 0.0:
@@ -549,7 +549,7 @@ def equivalent_conicity(geom: ContactGeometry, amplitude: float = 0.003) -> floa
 # ---------------------------------------------------------------------------------------------
 # Kernels
 # ---------------------------------------------------------------------------------------------
-@njit(cache=True)
+@kernel
 def _she_factor(creep_x: float, creep_y: float, friction: float, normal: float) -> float:
     """Shen-Hedrick-Elkins scale factor F'/F for the linear creep force (F_x, F_y)."""
     total = np.sqrt(creep_x * creep_x + creep_y * creep_y)
@@ -562,7 +562,7 @@ def _she_factor(creep_x: float, creep_y: float, friction: float, normal: float) 
     return limit / total
 
 
-@njit(cache=True)
+@kernel
 def _point_creepages(side, radius, a, cos_d, sin_d, r0, speed, ws_vyaw, ws_vpitch):
     """Longitudinal and spin creepage of a contact point at rolling radius ``radius`` and lateral
     distance ``a`` from the wheelset centre with contact angle delta (cos, sin):
@@ -573,7 +573,7 @@ def _point_creepages(side, radius, a, cos_d, sin_d, r0, speed, ws_vyaw, ws_vpitc
     return xi_x, xi_sp
 
 
-@njit(cache=True)
+@kernel
 def _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0, mu,
                         speed, ws_vyaw, ws_vpitch):
     """Creep forces (F_x, F_y in the contact plane, spin moment M_z) of one contact point with
@@ -589,14 +589,14 @@ def _point_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f
     return k * tx, k * ty, k * tm
 
 
-@njit(cache=True)
+@kernel
 def _kalker_linear(xi_x, xi_y, xi_sp, f11, f22, f23, f33):
     """Kalker's linear creep forces F_x = -f11 xi_x, F_y = -f22 xi_y - f23 xi_sp and spin moment
     M_z = f23 xi_y - f33 xi_sp (module docstring)."""
     return -f11 * xi_x, -f22 * xi_y - f23 * xi_sp, f23 * xi_y - f33 * xi_sp
 
 
-@njit(cache=True)
+@kernel
 def _creep_forces(scal, side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0,
                   mu, speed, ws_vyaw, ws_vpitch, semi_a, semi_b):
     """F_x, F_y, M_z of one contact point by the creep law ``scal[SCAL_CREEP_LAW]`` (0
@@ -611,7 +611,7 @@ def _creep_forces(scal, side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f
                                 scal[SCAL_CREEP_LAW + 1:SCAL_CREEP_LAW + 5])
 
 
-@njit(cache=True)
+@kernel
 def _polach_spin_factor(eps_m):
     """Polach's spin function (O. Polach, Vehicle System Dynamics 33 Suppl. (1999) 728-739):
     K_M = |eps_M| (delta^3/3 - delta^2/2 + 1/6) - sqrt((1 - delta^2)^3)/3 with
@@ -627,7 +627,7 @@ def _polach_spin_factor(eps_m):
     return e * u * u * (0.5 - u / 3.0) - w * np.sqrt(w) / 3.0
 
 
-@njit(cache=True)
+@kernel
 def _polach_forces(normal, xi_x, xi_y, xi_sp, f11, f22, f23, semi_a, semi_b, mu0, speed,
                    k_a, k_s, fall_a, fall_b):
     """Polach's creep forces (F_x, F_y; Kalker's sign: against the creepage) and the friction
@@ -678,7 +678,7 @@ def _polach_forces(normal, xi_x, xi_y, xi_sp, f11, f22, f23, semi_a, semi_b, mu0
     return fx, fy, mu
 
 
-@njit(cache=True)
+@kernel
 def _polach_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0,
                          mu, speed, ws_vyaw, ws_vpitch, semi_a, semi_b, polach):
     """Creep law ``polach``: :func:`_point_creep_forces`'s arguments (the point's kinematics, its
@@ -697,7 +697,7 @@ def _polach_creep_forces(side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, 
     return fx, fy, tm
 
 
-@njit(cache=True)
+@kernel
 def _grid_cell(y0: float, y1: float, n: int, y: float):
     """(i, w) of y on the uniform grid y0, y1, ... of n points: the cell [i, i + 1] and the
     weight w of point i + 1 (w < 0 before the first point, w > 1 after the last: linear
@@ -711,7 +711,7 @@ def _grid_cell(y0: float, y1: float, n: int, y: float):
     return i, s - i
 
 
-@njit(cache=True)
+@kernel
 def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
     """Linear interpolation of all table columns at y_rel (uniform grid; linear extrapolation
     of r and dz beyond the ends, other columns held)."""
@@ -725,7 +725,7 @@ def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
             out[c] = table[j, c]
 
 
-@njit(cache=True)
+@kernel
 def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: float,
                    wheelset, rail, row: np.ndarray, out: np.ndarray, creep_y_prev: float = 0.0,
                    creep_relax: float = 0.0) -> float:
@@ -798,7 +798,7 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     return xi_y_state
 
 
-@njit(cache=True)
+@kernel
 def _lerp2(zk: np.ndarray, j: int, j1: int, wy: float, i: int, w: float, c: int) -> float:
     """Column ``c`` of one zone's tables (n_yaw, n, N_ZCOLS) at weight ``w`` between rows i and
     i + 1 and weight ``wy`` between yaw layers j and j1 (bilinear)."""
@@ -808,7 +808,7 @@ def _lerp2(zk: np.ndarray, j: int, j1: int, wy: float, i: int, w: float, c: int)
     return lo * (1.0 - wy) + (zk[j1, i, c] * (1.0 - w) + zk[j1, i + 1, c] * w) * wy
 
 
-@njit(cache=True)
+@kernel
 def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, speed: float,
                           wheelset, rail, pts: np.ndarray, out: np.ndarray,
                           creep_prev: np.ndarray, creep_relax: float) -> None:

@@ -62,9 +62,9 @@ from collections import namedtuple
 from typing import Any, Mapping
 
 import numpy as np
-from numba import njit
 
 from ..constants import STANDARD_GRAVITY
+from ..jit import kernel
 
 #: EN 13803-1: cant is the height difference of the rails over 1500 mm.
 CANT_BASE_M = 1.5
@@ -147,7 +147,7 @@ def centreline_offset(xs: np.ndarray, ks: np.ndarray, x) -> np.ndarray:
     return _centreline_offsets(xs, ks, heading, offset, x.ravel()).reshape(x.shape)
 
 
-@njit(cache=True)
+@kernel
 def _centreline_offsets(xk, kappa, heading, offset, x):
     """:func:`centreline_offset` at each of the points ``x`` (1-D), by the loop's own
     :func:`_pose_on_segment`."""
@@ -234,7 +234,7 @@ def no_curve(model) -> CurveArrays:
     return curve_arrays(model, None)
 
 
-@njit(cache=True)
+@kernel
 def _knot_segment(xk, x):
     """Index i of the knot interval [xk[i], xk[i+1]) holding x (the first or last interval
     beyond the knots)."""
@@ -249,7 +249,7 @@ def _knot_segment(xk, x):
     return lo
 
 
-@njit(cache=True)
+@kernel
 def _pose_on_segment(xk, kappa, heading, offset, i, x):
     """(heading, lateral offset) of the centre line at x in knot interval i: the
     piecewise-linear curvature integrated exactly from the knots' heading and offset."""
@@ -259,7 +259,7 @@ def _pose_on_segment(xk, kappa, heading, offset, i, x):
             offset[i] + heading[i] * s + 0.5 * kappa[i] * s * s + dk * s * s * s / 6.0)
 
 
-@njit(cache=True)
+@kernel
 def _frame_at(curve, x):
     """(curvature, its x-derivative, cant angle, its x-derivative, heading, lateral offset) of
     the track frame at chainage x (linear interpolation; heading and offset integrated
@@ -276,7 +276,7 @@ def _frame_at(curve, x):
     return kappa, dk, theta, dth, heading, offset
 
 
-@njit(cache=True)
+@kernel
 def curve_frame(curve, x_lead, speed, q_track, v_track, f_track, ws_yaw_rate):
     """Fill the track frames' poses ``q_track`` and rates ``v_track`` (per vehicle DOF), the
     frame's inertial and gyroscopic loads ``f_track``, and every wheelset's frame yaw rate

@@ -20,10 +20,10 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
 from .curving import curve_frame
 from .contact import N_POINT_OUT, N_PTS_COLS
+from ..jit import kernel
 from .kernels import N_WHEEL_OUT, csr_matvec_sub, train_contact
 
 #: The train for a time loop: diagonal inverse mass, suspension stiffness and damping (CSR
@@ -43,7 +43,7 @@ VehicleWork = namedtuple("VehicleWork", ["force", "wheel", "row", "tmp", "creep_
                                          "pts"])
 
 
-@njit(cache=True)
+@kernel
 def _work(n_dof, n_ws, n_cols, n_pts):
     """Fresh :class:`VehicleWork` (numba: the time loops build theirs inside the kernel);
     ``n_pts``: contact points per wheel (1, or the number of two-point zones)."""
@@ -77,7 +77,7 @@ def vehicle_work(vehicle: VehicleArrays) -> VehicleWork:
                  max(vehicle.zones.shape[0], 1))
 
 
-@njit(cache=True)
+@kernel
 def vehicle_accelerations(vehicle, work, q, v, rail_kin, speed, creep_relax, a, x_lead):
     """a = M^-1 (f_const + f_contact - K q - C v); ``work.wheel`` holds the wheel table.
 

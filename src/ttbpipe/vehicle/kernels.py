@@ -13,16 +13,16 @@ shear-centre line, two-point contact only, 0 otherwise).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from .contact import N_COLS, N_POINT_OUT, N_PTS_COLS, _wheel_contact, _wheel_contact_points
+from ..jit import kernel
 
 N_WHEEL_OUT = 8
 #: Columns of ``rail_kin`` per wheel (ttbpipe.simulation.loop.track_kinematics).
 RAIL_KIN_COLS = 6
 
 
-@njit(cache=True)
+@kernel
 def csr_matvec_sub(indptr, indices, data, x, out):
     """out -= A x for a CSR matrix A."""
     for i in range(indptr.shape[0] - 1):
@@ -32,7 +32,7 @@ def csr_matvec_sub(indptr, indices, data, x, out):
         out[i] -= s
 
 
-@njit(cache=True)
+@kernel
 def _train_contact(q, v, ws_dofs, table, scal, zones, speed, rail_kin, force, wheel, row, tmp,
                    frame_yaw_rate):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``
@@ -43,7 +43,7 @@ def _train_contact(q, v, ws_dofs, table, scal, zones, speed, rail_kin, force, wh
                   (row, tmp, creep_state, np.zeros((n_pts, N_PTS_COLS))), 0.0, frame_yaw_rate)
 
 
-@njit(cache=True)
+@kernel
 def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratch, creep_relax,
                   frame_yaw_rate):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``.
