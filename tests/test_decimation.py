@@ -58,6 +58,20 @@ def test_streaming_decimation_equals_the_convolution_of_the_whole_record(q):
         assert np.max(np.abs(out[:, c] - ref)) <= 1e-12 * np.max(np.abs(x[:, c]))
 
 
+@pytest.mark.parametrize("n_samples", [1, 9, 150, 301])
+def test_records_shorter_than_the_filter_hold_both_ends(n_samples):
+    """Records shorter than the filter (293 taps at q = 8): every output row reaches back before
+    the first sample or beyond the last, held at those values (the convolution reference pads
+    them the same way)."""
+    rng = np.random.default_rng(n_samples)
+    x = np.cumsum(rng.standard_normal((n_samples, 2)), axis=0) + 5.0
+    out = decimate(x, 8)
+    for c in range(2):
+        ref = convolve_reference(x[:, c], 8)
+        assert out.shape[0] == ref.size
+        assert np.max(np.abs(out[:, c] - ref)) <= 1e-12 * np.max(np.abs(x[:, c]))
+
+
 def test_every_step_is_recorded_unfiltered_when_out_every_is_one():
     x = np.random.default_rng(0).standard_normal((50, 2))
     assert np.array_equal(decimate(x, 1), x)

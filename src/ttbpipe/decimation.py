@@ -4,7 +4,8 @@ A loop at step dt records every ``out_every``-th sample of its histories. Pickin
 folds everything above the output Nyquist frequency f_N = 1 / (2 out_every dt) back below it:
 rail accelerations carry much of their energy at hundreds of hertz, so their 500 Hz histories
 were aliased. The :class:`Decimator` low-passes every channel with one linear-phase FIR filter
-before it takes the sample, in the loop, with a ring buffer per channel:
+before it takes the sample, in the loop, in polyphase form (each sample is added to the output
+rows whose window holds it; :func:`push`):
 
 * design (:func:`decimation_taps`): a Kaiser-window FIR (scipy.signal.kaiserord/firwin, the
   window method of Oppenheim & Schafer) with its pass band flat to 0.8 f_N (ripple 1e-3) and its
@@ -32,10 +33,11 @@ from .jit import kernel
 PASS_FRACTION = 0.8
 STOP_ATTENUATION_DB = 60.0
 
-#: Filter taps, the ring buffer buffer[tap, channel] (one row per sample: a push writes one
-#: contiguous row), state = (next write position, samples pushed, rows written), decimation
-#: factor and delay in steps, and the output rows out[row, channel].
-Decimator = namedtuple("Decimator", ["taps", "buffer", "state", "out_every", "delay", "out"])
+#: Filter taps; the accumulators buffer[row mod n_rows, channel] of the output rows not yet
+#: complete; state = (unused, samples pushed, rows written); decimation factor and delay in
+#: steps; the output rows out[row, channel]; the last sample pushed (held by :func:`flush`).
+Decimator = namedtuple("Decimator", ["taps", "buffer", "state", "out_every", "delay", "out",
+                                     "last"])
 
 
 def decimation_taps(out_every: int) -> np.ndarray:
@@ -56,59 +58,63 @@ def decimation_taps(out_every: int) -> np.ndarray:
 def decimator(n_channels: int, n_out: int, out_every: int) -> Decimator:
     """A decimator for ``n_channels`` histories giving ``n_out`` output rows."""
     taps = decimation_taps(out_every)
-    return Decimator(taps, np.zeros((taps.size, n_channels)), np.zeros(3, dtype=np.int64),
-                     int(out_every), (taps.size - 1) // 2, np.zeros((n_out, n_channels)))
+    # a row is open from its oldest sample to its newest, (n_taps - 1) samples; the slot of row
+    # k is reused by row k + n_rows, which opens after row k is written
+    n_rows = (taps.size - 1) // int(out_every) + 2
+    return Decimator(taps, np.zeros((n_rows, n_channels)), np.zeros(3, dtype=np.int64),
+                     int(out_every), (taps.size - 1) // 2, np.zeros((n_out, n_channels)),
+                     np.zeros(n_channels))
 
 
 @kernel
-def _emit(dec, newest):
-    """Write the next output row: the filter output centred ``delay`` samples behind sample
-    ``newest`` (the row's own time)."""
-    row = dec.state[2]
+def _add_sample(dec, s, values):
+    """Add sample s (the first sample's value for s < 0: the history held at its start) to
+    every output row whose filter window holds it: row k takes taps[j] x[s] with
+    j = k out_every + delay - s in [0, n_taps)."""
     n_taps = dec.taps.shape[0]
-    n_channels = dec.buffer.shape[1]
-    out = dec.out
-    for c in range(n_channels):
-        out[row, c] = 0.0
-    # tap by tap over contiguous rows (each channel sums its taps in the order j = 0, 1, ...)
-    for j in range(n_taps):
-        sample = dec.buffer[(newest - j) % n_taps]
-        tap = dec.taps[j]
-        for c in range(n_channels):
-            out[row, c] += tap * sample[c]
-    dec.state[2] = row + 1
+    q = dec.out_every
+    n_rows = dec.buffer.shape[0]
+    # k from ceil((s - delay) / q) (and >= 0) to floor((s - delay + n_taps - 1) / q)
+    k_first = max(np.int64(0), -((dec.delay - s) // q))
+    k_last = min(dec.out.shape[0] - 1, (s - dec.delay + n_taps - 1) // q)
+    for k in range(k_first, k_last + 1):
+        tap = dec.taps[k * q + dec.delay - s]
+        row = dec.buffer[k % n_rows]
+        for c in range(values.shape[0]):
+            row[c] += tap * values[c]
 
 
 @kernel
 def push(dec, values):
     """Push the next sample of every channel; write the output row that becomes due.
 
-    Sample s goes to ring position s mod n_taps; before the first, the ring holds the first
-    sample (the history held at its start value). Row k, centred on sample k out_every, is due
-    once sample k out_every + delay is in.
+    Polyphase form: each sample is added, weighted by its tap, to the accumulator of every
+    output row whose window holds it, so only the (n_taps - 1) / out_every + 2 open rows are
+    kept, not the last n_taps samples (a working set of 82 KB instead of 623 KB for the
+    reference case's 266 channels, beside the structure's in the 1 MiB L2 cache). Before the
+    first sample the history is held at its value. Row k, centred on sample k out_every, is
+    complete, and written, once sample k out_every + delay is in.
     """
-    n_taps = dec.taps.shape[0]
     s = dec.state[1]
     if s == 0:
-        for j in range(n_taps):
-            for c in range(values.shape[0]):
-                dec.buffer[j, c] = values[c]
-    pos = s % n_taps
+        for held in range(-dec.delay, 0):      # row 0 reaches back to sample -delay
+            _add_sample(dec, held, values)
+    _add_sample(dec, s, values)
     for c in range(values.shape[0]):
-        dec.buffer[pos, c] = values[c]
+        dec.last[c] = values[c]
     dec.state[1] = s + 1
     k = dec.state[2]
     if k < dec.out.shape[0] and k * dec.out_every + dec.delay == s:
-        _emit(dec, s)
+        row = dec.buffer[k % dec.buffer.shape[0]]
+        for c in range(values.shape[0]):
+            dec.out[k, c] = row[c]
+            row[c] = 0.0
+        dec.state[2] = k + 1
 
 
 @kernel
 def flush(dec):
     """After the last step: hold the last sample until every output row is written."""
-    n_taps = dec.taps.shape[0]
-    last = np.empty(dec.buffer.shape[1])
-    pos = (dec.state[1] - 1) % n_taps
-    for c in range(dec.buffer.shape[1]):
-        last[c] = dec.buffer[pos, c]
+    last = dec.last.copy()
     while dec.state[2] < dec.out.shape[0]:
         push(dec, last)
