@@ -157,6 +157,33 @@ def group_triple_entries(tri_ptr, tri_dof, tri_coef):
 
 
 @kernel
+def _vertical_sums(dofs, coef, disp, vel, j0, j1, d0, v0):
+    """(d0, v0) plus the vertical link's terms of entries [j0, j1) of a link triple."""
+    for j in range(j0, j1):
+        q = dofs[j]
+        c0 = coef[3 * j]
+        d0 += c0 * disp[q]
+        v0 += c0 * vel[q]
+    return d0, v0
+
+
+@kernel
+def _lateral_roll_sums(dofs, coef, disp, vel, j0, j1, d1, d2, v1, v2):
+    """(d1, d2, v1, v2) plus the lateral and roll links' terms of entries [j0, j1)."""
+    for j in range(j0, j1):
+        q = dofs[j]
+        u = disp[q]
+        w = vel[q]
+        c1 = coef[3 * j + 1]
+        c2 = coef[3 * j + 2]
+        d1 += c1 * u
+        d2 += c2 * u
+        v1 += c1 * w
+        v2 += c2 * w
+    return d1, d2, v1, v2
+
+
+@kernel
 def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every link triple (CA quadrature points; rail pads and ballast have
     compact kernels of their own).
@@ -184,40 +211,12 @@ def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
             j_gen = group_end[_TWO * t + _ONE]
             j1 = packed.tri_ptr[t + _ONE]
             t3 = _THREE * t
-            d0 = 0.0
-            d1 = 0.0
-            d2 = 0.0
-            v0 = 0.0
-            v1 = 0.0
-            v2 = 0.0
-            for j in range(j0, j_lat):
-                q = dofs[j]
-                c0 = coef[3 * j]
-                d0 += c0 * disp[q]
-                v0 += c0 * vel[q]
-            for j in range(j_lat, j_gen):
-                q = dofs[j]
-                u = disp[q]
-                w = vel[q]
-                c1 = coef[3 * j + 1]
-                c2 = coef[3 * j + 2]
-                d1 += c1 * u
-                d2 += c2 * u
-                v1 += c1 * w
-                v2 += c2 * w
-            for j in range(j_gen, j1):
-                q = dofs[j]
-                u = disp[q]
-                w = vel[q]
-                c0 = coef[3 * j]
-                c1 = coef[3 * j + 1]
-                c2 = coef[3 * j + 2]
-                d0 += c0 * u
-                d1 += c1 * u
-                d2 += c2 * u
-                v0 += c0 * w
-                v1 += c1 * w
-                v2 += c2 * w
+            d0, v0 = _vertical_sums(dofs, coef, disp, vel, j0, j_lat, 0.0, 0.0)
+            d1, d2, v1, v2 = _lateral_roll_sums(dofs, coef, disp, vel, j_lat, j_gen,
+                                                0.0, 0.0, 0.0, 0.0)
+            # the general group: each link's terms in the entries' order, as in the groups
+            d0, v0 = _vertical_sums(dofs, coef, disp, vel, j_gen, j1, d0, v0)
+            d1, d2, v1, v2 = _lateral_roll_sums(dofs, coef, disp, vel, j_gen, j1, d1, d2, v1, v2)
             p0 = packed.tri_k[t3] * d0 + packed.tri_c[t3] * v0
             p1 = packed.tri_k[t3 + _ONE] * d1 + packed.tri_c[t3 + _ONE] * v1
             p2 = packed.tri_k[t3 + _TWO] * d2 + packed.tri_c[t3 + _TWO] * v2
