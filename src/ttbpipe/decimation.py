@@ -90,7 +90,7 @@ def push(dec, values):
 
     Polyphase form: each sample is added, weighted by its tap, to the accumulator of every
     output row whose window holds it, so only the (n_taps - 1) / out_every + 2 open rows are
-    kept, not the last n_taps samples (a working set of 82 KB instead of 623 KB for the
+    kept, not the last n_taps samples (a working set of 81 KB instead of 623 KB for the
     reference case's 266 channels, beside the structure's in the 1 MiB L2 cache). Before the
     first sample the history is held at its value. Row k, centred on sample k out_every, is
     complete, and written, once sample k out_every + delay is in.
