@@ -25,13 +25,13 @@ import time
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
-from numba import njit  # noqa: E402
 
+from ttbpipe.jit import kernel  # noqa: E402
 from ttbpipe.structure import build_structure  # noqa: E402
 from ttbpipe.structure.kernels import _EVERY_ELEMENT, _beam_forces, _triple_forces  # noqa: E402
 
 
-@njit(cache=True)
+@kernel
 def _beam_forces_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force):
     """_beam_forces for K samples: disp, force (n_dof, K); ei_v, ei_l, gk (n_beam, K)."""
     n_samples = disp.shape[1]
@@ -62,7 +62,7 @@ def _beam_forces_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force):
             force[b + 4, k] += kt
 
 
-@njit(cache=True)
+@kernel
 def _triple_forces_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scratch):
     """_triple_forces for K samples: disp, vel, force (n_dof, K); stiff, damp (3 n_tri, K);
     scratch (6, K)."""
@@ -100,27 +100,27 @@ def _triple_forces_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scra
 
 # Drivers: the repetitions run inside numba, so that the time is the kernels' own and not
 # Python's call overhead (unboxing the packed structure costs microseconds per call).
-@njit(cache=True)
+@kernel
 def _repeat_beams_today(packs, disp, vel, force, calls):
     for _ in range(calls):
         for k in range(len(packs)):
             _beam_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
 
 
-@njit(cache=True)
+@kernel
 def _repeat_triples_today(packs, disp, vel, force, calls):
     for _ in range(calls):
         for k in range(len(packs)):
             _triple_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
 
 
-@njit(cache=True)
+@kernel
 def _repeat_beams_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force, calls):
     for _ in range(calls):
         _beam_forces_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force)
 
 
-@njit(cache=True)
+@kernel
 def _repeat_triples_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scratch, calls):
     for _ in range(calls):
         _triple_forces_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scratch)

@@ -25,6 +25,7 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 from numba import njit  # noqa: E402
 
+from ttbpipe.jit import KERNEL_OPTIONS  # noqa: E402
 from ttbpipe.simulation import loop as L  # noqa: E402
 from ttbpipe.simulation.coupled import prepare  # noqa: E402
 from ttbpipe.simulation.recorder import (record_step_channels, record_vehicle_output,  # noqa: E402
@@ -41,7 +42,8 @@ VARIANTS = {0: "full", 1: "no structure kernel", 2: "no monitors", 3: "no decima
             4: "no structure update"}
 
 
-@njit
+# compiled as the loop it copies is (not cached: a benchmark)
+@njit(error_model=KERNEL_OPTIONS["error_model"])
 def loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_every, mode):
     """The coupled loop's step, leaving out the part ``mode`` names (:data:`VARIANTS`)."""
     vehicle = placed.vehicle
