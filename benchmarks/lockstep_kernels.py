@@ -7,10 +7,10 @@ as they run today (one sample per call, K calls) against prototype lockstep kern
 here, which carry K samples side by side (displacements, velocities and forces of shape
 (n_dof, K), the sample index innermost so that the K operations on one DOF are contiguous and
 can be vectorised) and per-sample stiffness and damping (random property fields differ between
-samples; shape (n, K)). The triples are measured twice: a prototype over the dense
-coefficient list, and one that reads the entries in the groups of today's kernel
-(`group_triple_entries`: only the non-zero coefficients). Both variants compute the same
-forces (checked to 1e-12 relative).
+samples; shape (n, K)). The lockstep triples read the entries in the groups of today's kernel
+(`group_triple_entries`: only the non-zero coefficients); the lockstep pads run one loop per pad
+group, so that the sample loop has no branch. Both variants compute the same forces (checked
+to 1e-12 relative).
 Prints CPU microseconds per sample and call (best of 5 alternating rounds of 3 x 2000
 calls, repeated inside numba)
 for K = 1, 2, 4, 8, 16.
@@ -68,46 +68,38 @@ def _beam_forces_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force):
 
 
 @kernel
-def _triple_forces_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scratch):
-    """_triple_forces for K samples: disp, vel, force (n_dof, K); stiff, damp (3 n_tri, K);
-    scratch (6, K)."""
-    n_samples = disp.shape[1]
-    for t in range(stiff.shape[0] // 3):
-        j0 = ptr[t]
-        j1 = ptr[t + 1]
-        scratch[:, :] = 0.0
-        for j in range(j0, j1):
-            q = dofs[j]
-            c0 = coef[3 * j]
-            c1 = coef[3 * j + 1]
-            c2 = coef[3 * j + 2]
-            for k in range(n_samples):
-                u = disp[q, k]
-                w = vel[q, k]
-                scratch[0, k] += c0 * u
-                scratch[1, k] += c1 * u
-                scratch[2, k] += c2 * u
-                scratch[3, k] += c0 * w
-                scratch[4, k] += c1 * w
-                scratch[5, k] += c2 * w
-        for k in range(n_samples):
-            scratch[0, k] = stiff[3 * t, k] * scratch[0, k] + damp[3 * t, k] * scratch[3, k]
-            scratch[1, k] = stiff[3 * t + 1, k] * scratch[1, k] + damp[3 * t + 1, k] * scratch[4, k]
-            scratch[2, k] = stiff[3 * t + 2, k] * scratch[2, k] + damp[3 * t + 2, k] * scratch[5, k]
-        for j in range(j0, j1):
-            q = dofs[j]
-            c0 = coef[3 * j]
-            c1 = coef[3 * j + 1]
-            c2 = coef[3 * j + 2]
-            for k in range(n_samples):
-                force[q, k] -= c0 * scratch[0, k] + c1 * scratch[1, k] + c2 * scratch[2, k]
+def _add_vertical(dofs, coef, disp, vel, j0, j1, scratch):
+    """Add the vertical link's terms of entries [j0, j1) to scratch rows 0 and 3 (K samples)."""
+    for j in range(j0, j1):
+        q = dofs[j]
+        c0 = coef[3 * j]
+        for k in range(disp.shape[1]):
+            scratch[0, k] += c0 * disp[q, k]
+            scratch[3, k] += c0 * vel[q, k]
 
 
 @kernel
-def _triple_forces_lockstep_grouped(ptr, group_end, dofs, coef, stiff, damp, disp, vel, force,
-                                    scratch):
-    """_triple_forces for K samples over the grouped entries (vertical-only, lateral and
-    roll-only, general), reading only the non-zero coefficients, as today's kernel does."""
+def _add_lateral_roll(dofs, coef, disp, vel, j0, j1, scratch):
+    """Add the lateral and roll links' terms of entries [j0, j1) to scratch rows 1, 2, 4, 5."""
+    for j in range(j0, j1):
+        q = dofs[j]
+        c1 = coef[3 * j + 1]
+        c2 = coef[3 * j + 2]
+        for k in range(disp.shape[1]):
+            u = disp[q, k]
+            w = vel[q, k]
+            scratch[1, k] += c1 * u
+            scratch[2, k] += c2 * u
+            scratch[4, k] += c1 * w
+            scratch[5, k] += c2 * w
+
+
+@kernel
+def _triple_forces_lockstep(ptr, group_end, dofs, coef, stiff, damp, disp, vel, force, scratch):
+    """_triple_forces for K samples: disp, vel, force (n_dof, K); stiff, damp (3 n_tri, K);
+    scratch (6, K). The entries in the groups of ``group_triple_entries`` (vertical only, lateral
+    and roll only, general), each group reading its non-zero coefficients, as today's kernel
+    does (the CA mortar has no general entry)."""
     n_samples = disp.shape[1]
     for t in range(stiff.shape[0] // 3):
         j0 = ptr[t]
@@ -115,37 +107,10 @@ def _triple_forces_lockstep_grouped(ptr, group_end, dofs, coef, stiff, damp, dis
         j_gen = group_end[2 * t + 1]
         j1 = ptr[t + 1]
         scratch[:, :] = 0.0
-        for j in range(j0, j_lat):
-            q = dofs[j]
-            c0 = coef[3 * j]
-            for k in range(n_samples):
-                scratch[0, k] += c0 * disp[q, k]
-                scratch[3, k] += c0 * vel[q, k]
-        for j in range(j_lat, j_gen):
-            q = dofs[j]
-            c1 = coef[3 * j + 1]
-            c2 = coef[3 * j + 2]
-            for k in range(n_samples):
-                u = disp[q, k]
-                w = vel[q, k]
-                scratch[1, k] += c1 * u
-                scratch[2, k] += c2 * u
-                scratch[4, k] += c1 * w
-                scratch[5, k] += c2 * w
-        for j in range(j_gen, j1):
-            q = dofs[j]
-            c0 = coef[3 * j]
-            c1 = coef[3 * j + 1]
-            c2 = coef[3 * j + 2]
-            for k in range(n_samples):
-                u = disp[q, k]
-                w = vel[q, k]
-                scratch[0, k] += c0 * u
-                scratch[1, k] += c1 * u
-                scratch[2, k] += c2 * u
-                scratch[3, k] += c0 * w
-                scratch[4, k] += c1 * w
-                scratch[5, k] += c2 * w
+        _add_vertical(dofs, coef, disp, vel, j0, j_lat, scratch)
+        _add_lateral_roll(dofs, coef, disp, vel, j_lat, j_gen, scratch)
+        _add_vertical(dofs, coef, disp, vel, j_gen, j1, scratch)
+        _add_lateral_roll(dofs, coef, disp, vel, j_gen, j1, scratch)
         for k in range(n_samples):
             scratch[0, k] = stiff[3 * t, k] * scratch[0, k] + damp[3 * t, k] * scratch[3, k]
             scratch[1, k] = stiff[3 * t + 1, k] * scratch[1, k] + damp[3 * t + 1, k] * scratch[4, k]
@@ -178,6 +143,19 @@ def _pad_rail_motion(disp, vel, rd, d_f, k):
 
 
 @kernel
+def _pad_link_forces(stiff, damp, force, p3, rd, d_f, k, dz, dy, dr, vz, vy, vr):
+    """Sample k's pad forces (pz, py, pr) from its relative motion; subtracts them from the rail
+    node (the foot's lateral force also as a roll moment) and returns them for the seat."""
+    pz = stiff[p3, k] * dz + damp[p3, k] * vz
+    py = stiff[p3 + 1, k] * dy + damp[p3 + 1, k] * vy
+    pr = stiff[p3 + 2, k] * dr + damp[p3 + 2, k] * vr
+    force[rd, k] -= pz
+    force[rd + 2, k] -= py
+    force[rd + 4, k] -= d_f * py + pr
+    return pz, py, pr
+
+
+@kernel
 def _pad_forces_lockstep(rail, seat_a, seat_b, geom, n_slab, n_slab_ballast, d_f, t_half,
                          stiff, damp, disp, vel, force):
     """_pad_forces for K samples: disp, vel, force (n_dof, K); stiff, damp (3 n_pad, K). One
@@ -207,12 +185,8 @@ def _pad_forces_lockstep(rail, seat_a, seat_b, geom, n_slab, n_slab_ballast, d_f
             vy += t_half * vrs - (n1 * vel[da + 2, k] + n2 * vel[da + 3, k]
                                   + n3 * vel[db + 2, k] + n4 * vel[db + 3, k])
             vr -= vrs
-            pz = stiff[p3, k] * dz + damp[p3, k] * vz
-            py = stiff[p3 + 1, k] * dy + damp[p3 + 1, k] * vy
-            pr = stiff[p3 + 2, k] * dr + damp[p3 + 2, k] * vr
-            force[rd, k] -= pz
-            force[rd + 2, k] -= py
-            force[rd + 4, k] -= d_f * py + pr
+            pz, py, pr = _pad_link_forces(stiff, damp, force, p3, rd, d_f, k,
+                                          dz, dy, dr, vz, vy, vr)
             force[da, k] += n1 * pz
             force[da + 1, k] += n2 * pz
             force[db, k] += n3 * pz
@@ -237,12 +211,8 @@ def _pad_forces_lockstep(rail, seat_a, seat_b, geom, n_slab, n_slab_ballast, d_f
             vz -= vel[sd, k] + e * vel[sd + 2, k]
             vy -= vel[sd + 1, k]
             vr -= vel[sd + 2, k]
-            pz = stiff[p3, k] * dz + damp[p3, k] * vz
-            py = stiff[p3 + 1, k] * dy + damp[p3 + 1, k] * vy
-            pr = stiff[p3 + 2, k] * dr + damp[p3 + 2, k] * vr
-            force[rd, k] -= pz
-            force[rd + 2, k] -= py
-            force[rd + 4, k] -= d_f * py + pr
+            pz, py, pr = _pad_link_forces(stiff, damp, force, p3, rd, d_f, k,
+                                          dz, dy, dr, vz, vy, vr)
             force[sd, k] += pz
             force[sd + 1, k] += py
             force[sd + 2, k] += e * pz + pr
@@ -251,12 +221,9 @@ def _pad_forces_lockstep(rail, seat_a, seat_b, geom, n_slab, n_slab_ballast, d_f
         rd = rail[p]
         for k in range(n_samples):
             dz, dy, dr, vz, vy, vr = _pad_rail_motion(disp, vel, rd, d_f, k)
-            pz = stiff[p3, k] * dz + damp[p3, k] * vz
-            py = stiff[p3 + 1, k] * dy + damp[p3 + 1, k] * vy
-            pr = stiff[p3 + 2, k] * dr + damp[p3 + 2, k] * vr
-            force[rd, k] -= pz
-            force[rd + 2, k] -= py
-            force[rd + 4, k] -= d_f * py + pr
+            pz, py, pr = _pad_link_forces(stiff, damp, force, p3, rd, d_f, k,
+                                          dz, dy, dr, vz, vy, vr)
+
 
 # Drivers: the repetitions run inside numba, so that the time is the kernels' own and not
 # Python's call overhead (unboxing the packed structure costs microseconds per call).
@@ -281,12 +248,6 @@ def _repeat_beams_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force, ca
 
 
 @kernel
-def _repeat_triples_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scratch, calls):
-    for _ in range(calls):
-        _triple_forces_lockstep(ptr, dofs, coef, stiff, damp, disp, vel, force, scratch)
-
-
-@kernel
 def _repeat_pads_today(packs, disp, vel, force, calls):
     for _ in range(calls):
         for k in range(len(packs)):
@@ -294,11 +255,10 @@ def _repeat_pads_today(packs, disp, vel, force, calls):
 
 
 @kernel
-def _repeat_triples_lockstep_grouped(ptr, group_end, dofs, coef, stiff, damp, disp, vel, force,
-                                     scratch, calls):
+def _repeat_triples_lockstep(ptr, group_end, dofs, coef, stiff, damp, disp, vel, force,
+                             scratch, calls):
     for _ in range(calls):
-        _triple_forces_lockstep_grouped(ptr, group_end, dofs, coef, stiff, damp, disp, vel, force,
-                                        scratch)
+        _triple_forces_lockstep(ptr, group_end, dofs, coef, stiff, damp, disp, vel, force, scratch)
 
 
 @kernel
@@ -373,13 +333,9 @@ def main() -> None:
             _repeat_triples_today(packs, d_rows, v_rows, f_rows, calls)
 
         def triples_lockstep(calls):
-            _repeat_triples_lockstep(p.tri_ptr, p.tri_dof, p.tri_coef, stiff, damp, disp, vel,
-                                     force, scratch, calls)
-
-        def triples_lockstep_grouped(calls):
-            _repeat_triples_lockstep_grouped(p.tri_ptr, p.tri_group_end, p.tri_kernel_dof,
-                                             p.tri_kernel_coef, stiff, damp, disp, vel, force,
-                                             scratch, calls)
+            _repeat_triples_lockstep(p.tri_ptr, p.tri_group_end, p.tri_kernel_dof,
+                                     p.tri_kernel_coef, stiff, damp, disp, vel, force, scratch,
+                                     calls)
 
         n_slab = int(p.pad_group[0])
         n_slab_ballast = n_slab + int(p.pad_group[1])
@@ -394,10 +350,7 @@ def main() -> None:
 
         for name, today, lock in (("beams", beams_today, beams_lockstep),
                                   ("rail pads", pads_today, pads_lockstep),
-                                  ("CA triples, dense prototype", triples_today,
-                                   triples_lockstep),
-                                  ("CA triples, grouped (non-zero coefficients)", triples_today,
-                                   triples_lockstep_grouped)):
+                                  ("CA triples", triples_today, triples_lockstep)):
             f_rows[:] = 0.0
             force[:] = 0.0
             today(1)
