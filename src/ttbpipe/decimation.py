@@ -34,8 +34,8 @@ PASS_FRACTION = 0.8
 STOP_ATTENUATION_DB = 60.0
 
 #: Filter taps; the accumulators buffer[row mod n_rows, channel] of the output rows not yet
-#: complete; state = (unused, samples pushed, rows written); decimation factor and delay in
-#: steps; the output rows out[row, channel]; the last sample pushed (held by :func:`flush`).
+#: complete; state = (samples pushed, rows written); decimation factor and delay in steps; the
+#: output rows out[row, channel]; the last sample pushed (held by :func:`flush`).
 Decimator = namedtuple("Decimator", ["taps", "buffer", "state", "out_every", "delay", "out",
                                      "last"])
 
@@ -61,7 +61,7 @@ def decimator(n_channels: int, n_out: int, out_every: int) -> Decimator:
     # a row is open from its oldest sample to its newest, (n_taps - 1) samples; the slot of row
     # k is reused by row k + n_rows, which opens after row k is written
     n_rows = (taps.size - 1) // int(out_every) + 2
-    return Decimator(taps, np.zeros((n_rows, n_channels)), np.zeros(3, dtype=np.int64),
+    return Decimator(taps, np.zeros((n_rows, n_channels)), np.zeros(2, dtype=np.int64),
                      int(out_every), (taps.size - 1) // 2, np.zeros((n_out, n_channels)),
                      np.zeros(n_channels))
 
@@ -95,26 +95,26 @@ def push(dec, values):
     first sample the history is held at its value. Row k, centred on sample k out_every, is
     complete, and written, once sample k out_every + delay is in.
     """
-    s = dec.state[1]
+    s = dec.state[0]
     if s == 0:
         for held in range(-dec.delay, 0):      # row 0 reaches back to sample -delay
             _add_sample(dec, held, values)
     _add_sample(dec, s, values)
     for c in range(values.shape[0]):
         dec.last[c] = values[c]
-    dec.state[1] = s + 1
-    k = dec.state[2]
+    dec.state[0] = s + 1
+    k = dec.state[1]
     if k < dec.out.shape[0] and k * dec.out_every + dec.delay == s:
         row = dec.buffer[k % dec.buffer.shape[0]]
         for c in range(values.shape[0]):
             dec.out[k, c] = row[c]
             row[c] = 0.0
-        dec.state[2] = k + 1
+        dec.state[1] = k + 1
 
 
 @kernel
 def flush(dec):
     """After the last step: hold the last sample until every output row is written."""
     last = dec.last.copy()
-    while dec.state[2] < dec.out.shape[0]:
+    while dec.state[1] < dec.out.shape[0]:
         push(dec, last)
