@@ -227,31 +227,27 @@ def _pad_forces_lockstep(rail, seat_a, seat_b, geom, n_slab, n_slab_ballast, d_f
 
 # Drivers: the repetitions run inside numba, so that the time is the kernels' own and not
 # Python's call overhead (unboxing the packed structure costs microseconds per call).
-@kernel
-def _repeat_beams_today(packs, disp, vel, force, calls):
-    for _ in range(calls):
-        for k in range(len(packs)):
-            _beam_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
+# Today's kernels, one sample per call; part: 0 beams, 1 rail pads, 2 link triples (a code, as
+# numba does not cache a kernel that takes a compiled function as an argument).
+BEAMS, PADS, TRIPLES = 0, 1, 2
 
 
 @kernel
-def _repeat_triples_today(packs, disp, vel, force, calls):
+def _repeat_today(part, packs, disp, vel, force, calls):
     for _ in range(calls):
         for k in range(len(packs)):
-            _triple_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
+            if part == BEAMS:
+                _beam_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
+            elif part == PADS:
+                _pad_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
+            else:
+                _triple_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
 
 
 @kernel
 def _repeat_beams_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force, calls):
     for _ in range(calls):
         _beam_forces_lockstep(dof_a, dof_b, length, ei_v, ei_l, gk, disp, force)
-
-
-@kernel
-def _repeat_pads_today(packs, disp, vel, force, calls):
-    for _ in range(calls):
-        for k in range(len(packs)):
-            _pad_forces(packs[k], disp[k], vel[k], force[k], _EVERY_ELEMENT, 1)
 
 
 @kernel
@@ -323,14 +319,14 @@ def main() -> None:
         scratch = np.zeros((6, k_samples))
 
         def beams_today(calls):
-            _repeat_beams_today(packs, d_rows, v_rows, f_rows, calls)
+            _repeat_today(BEAMS, packs, d_rows, v_rows, f_rows, calls)
 
         def beams_lockstep(calls):
             _repeat_beams_lockstep(p.beam_dof_a, p.beam_dof_b, p.beam_L, ei_v, ei_l, gk, disp,
                                    force, calls)
 
         def triples_today(calls):
-            _repeat_triples_today(packs, d_rows, v_rows, f_rows, calls)
+            _repeat_today(TRIPLES, packs, d_rows, v_rows, f_rows, calls)
 
         def triples_lockstep(calls):
             _repeat_triples_lockstep(p.tri_ptr, p.tri_group_end, p.tri_kernel_dof,
@@ -341,7 +337,7 @@ def main() -> None:
         n_slab_ballast = n_slab + int(p.pad_group[1])
 
         def pads_today(calls):
-            _repeat_pads_today(packs, d_rows, v_rows, f_rows, calls)
+            _repeat_today(PADS, packs, d_rows, v_rows, f_rows, calls)
 
         def pads_lockstep(calls):
             _repeat_pads_lockstep(p.pad_rail, p.pad_seat_a, p.pad_seat_b, p.pad_geom, n_slab,
