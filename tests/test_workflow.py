@@ -99,6 +99,34 @@ def test_profiles_do_not_keep_snakemake_alive_after_its_last_job(profile):
             "that long after its last job")
 
 
+#: Modules the Snakefile's own process must not load: it validates the configuration and plans
+#: the study (every ``snakemake`` call, dry runs included, pays for what it imports), while the
+#: jobs load what they compute with. scipy.stats and numba cost about 1 s and 0.5 s, the
+#: structure package (SciPy's sparse solvers) and Matplotlib more.
+PLANNING_MUST_NOT_IMPORT = ("numba", "scipy.stats", "scipy.sparse.linalg", "scipy.integrate",
+                            "scipy.signal", "matplotlib", "ttbpipe.structure", "ttbpipe.tipm.stages",
+                            "ttbpipe.reliability.subset")
+
+
+def test_planning_the_default_study_loads_no_compute_modules(tmp_path):
+    """``snakemake -n`` on the shipped default study in a fresh copy (no campaign written yet,
+    so the plan also counts the synthetic campaigns' rows): its process imports none of
+    :data:`PLANNING_MUST_NOT_IMPORT` (``python -X importtime`` lists every module it loads).
+    Measured: the dry run of a finished default study took 5.5-5.9 s with them, the Snakemake
+    call's start-up on every run (docs/performance.md, "The Snakefile's imports")."""
+    _copy_repository(tmp_path)
+    result = subprocess.run([sys.executable, "-X", "importtime", "-m", "snakemake", "-n",
+                             "--cores", "1"], cwd=tmp_path, capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    assert "simulate_batch" in result.stdout, result.stdout[-3000:]
+    loaded = {line.rsplit("|", 1)[1].strip() for line in result.stderr.splitlines()
+              if line.startswith("import time:") and line.count("|") == 2}
+    assert "ttbpipe.study.plan" in loaded     # the listing is the planning process's
+    unwanted = [name for name in PLANNING_MUST_NOT_IMPORT
+                if any(m == name or m.startswith(name + ".") for m in loaded)]
+    assert not unwanted, f"the Snakefile's process imported {unwanted}"
+
+
 @pytest.mark.slow
 def test_small_study_runs_and_a_new_campaign_reruns_only_its_jobs(tmp_path):
     _copy_repository(tmp_path)

@@ -5,7 +5,7 @@
 # (results/study/subset/state/<limit>.<digest>.state.npz, not a Snakemake output, so a killed
 # job keeps it): rerunning the job resumes where it stopped, with the same result.
 
-from ttbpipe.reliability.study import resolve_subset as _subset_resolve
+from ttbpipe.study.design import resolve_subset as _subset_resolve
 
 SUBSET = _subset_resolve(config)
 

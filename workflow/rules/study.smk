@@ -21,7 +21,7 @@ from ttbpipe.study.design import resolve_scenarios as _study_resolve_scenarios
 from ttbpipe.study.design import scenario_labels as _study_scenario_labels
 from ttbpipe.study import plan as _study_plan
 from ttbpipe.study.samples import resolve_simulation as _study_resolve_simulation
-from ttbpipe.tipm.stages import population_dates as _tipm_population_dates_of
+from ttbpipe.tipm.population import population_dates as _tipm_population_dates_of
 
 STUDY_SIMULATION = _study_resolve_simulation(config["simulation"])
 STUDY_SCENARIOS = _study_resolve_scenarios(config["study"])

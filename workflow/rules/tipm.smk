@@ -6,7 +6,7 @@
 # nothing of earlier campaigns; the evolution model, the forecast and the hold-out validation
 # genuinely depend on every campaign and are refitted.
 
-from ttbpipe.tipm.stages import population_dates as _tipm_population_dates
+from ttbpipe.tipm.population import population_dates as _tipm_population_dates
 
 TIPM = config.get("tipm", {})
 TIPM_LAST = list(CAMPAIGNS)[-1]

@@ -42,7 +42,6 @@ import math
 import numpy as np
 
 from ..stats.limits import DECK_VERTICAL_ACC_M_S2
-from ..structure.monitors import deck_columns
 from .base import Profile, Row, governing
 from .modal import span_frequencies
 from .monitors import TWIST_BASE_M, TWIST_COLUMN
@@ -141,6 +140,10 @@ def _twist(run: RunData) -> tuple[list[str], np.ndarray]:
 
 
 def evaluate(run: RunData, options) -> list[Row]:
+    # imported here: the structure package loads numba and SciPy's sparse solvers, which the
+    # Snakefile (it loads every profile to resolve the assessment) does not need
+    from ..structure.monitors import deck_columns
+
     acc = run.deck_acceleration()
     disp = run.girder("disp_mm")
     if not acc:

@@ -32,7 +32,6 @@ import math
 from typing import Callable
 
 import numpy as np
-from scipy import integrate
 
 from ..channels import SPECTRAL_CHANNELS
 
@@ -153,6 +152,10 @@ class TrackSpectrum(abc.ABC):
         def integrand(log_n: float) -> float:
             n = math.exp(log_n)
             return float(self._psd_mm2_m(channel, np.array([n]))[0]) * n  # dn = n d(log n)
+
+        # imported here: scipy.integrate loads SciPy's sparse and linear-algebra modules, which
+        # planning a study (it counts a synthetic campaign's rows) does not need
+        from scipy import integrate
 
         variance = 0.0
         for a, b in zip(edges[:-1], edges[1:]):

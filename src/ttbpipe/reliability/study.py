@@ -33,8 +33,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..configuration import validate_section
 from ..stats.limits import limits_from_config
+from ..study.design import resolve_subset
 from .coupled import CoupledLimitState
 from .subset import SubsetSettings, SubsetSimulation
 
@@ -49,12 +49,6 @@ SCENARIO_LABEL = "subset"
 RESULT_COLUMNS = ("scenario", "limit", "column", "threshold", "probability", "ci_low", "ci_high",
                   "cov", "reliability_index", "n_evaluations", "method", "confidence_level",
                   "n_dims", "n_levels", "wall_time_s")
-
-
-def resolve_subset(config: Mapping[str, Any]) -> dict[str, Any]:
-    """``study.scenarios.subset`` validated, defaults filled in."""
-    return validate_section((config.get("study") or {}).get("scenarios"), "study",
-                            "scenarios")["subset"]
 
 
 def subset_inputs(config: Mapping[str, Any], settings: Mapping[str, Any],

@@ -67,6 +67,12 @@ def resolve_scenarios(study: Mapping[str, Any] | None) -> dict[str, dict[str, An
     return validate_section((study or {}).get("scenarios"), "study", "scenarios")
 
 
+def resolve_subset(config: Mapping[str, Any]) -> dict[str, Any]:
+    """``study.scenarios.subset`` of a study configuration validated, defaults filled in (the
+    rare-event scenario, :mod:`ttbpipe.reliability.study`)."""
+    return resolve_scenarios(config.get("study"))["subset"]
+
+
 def scenario_key(label: str) -> int:
     """Stable 32-bit integer of a scenario label (CRC-32; part of the sample seed)."""
     return zlib.crc32(str(label).encode())

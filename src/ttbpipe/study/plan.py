@@ -114,7 +114,7 @@ def sample_counts(config: Mapping[str, Any], labels: Mapping[str, Sequence[str]]
                   ) -> dict[str, int]:
     """Number of samples of every scenario label (``labels``: kind -> labels, as
     :func:`ttbpipe.study.design.scenario_labels` gives them)."""
-    from ..tipm.stages import resolve_config, selector_from_config
+    from ..tipm.settings import representative_count, resolve_config
 
     sc = resolve_scenarios(config["study"])
     counts: dict[str, int] = {}
@@ -123,7 +123,9 @@ def sample_counts(config: Mapping[str, Any], labels: Mapping[str, Sequence[str]]
         if population_sections is None or latest_sections is None:
             raise ValueError("the irregularity and forecast scenarios need the number of "
                              "sections of the inspection campaigns")
-        m = selector_from_config(tipm).n_samples(int(population_sections))
+        selection = tipm["selection"]
+        m = representative_count(int(population_sections), selection["fraction"],
+                                 selection["min_samples"], selection.get("max_samples"))
     for label in labels.get("irregularity", ()):
         counts[label] = m
     for label in labels.get(SINGLE, ()):
@@ -169,7 +171,7 @@ def mc_profile_settings(config: Mapping[str, Any]) -> dict[str, Any]:
     """Profile settings of the Monte Carlo irregularity scenario (its population's PSD band and
     the TIPM profile length, step and synthesis ``amplitudes``: ``tipm.profiles``), the keys
     :func:`ttbpipe.study.samples.mc_profile` reads."""
-    from ..tipm.stages import resolve_config
+    from ..tipm.settings import resolve_config
 
     return {"wavelength_band_m": (config.get("psd") or {}).get("wavelength_band_m"),
             **resolve_config(config.get("tipm"))["profiles"]}

@@ -25,7 +25,7 @@ from ..channels import SPECTRAL_CHANNELS
 from ..io import read_provenance, read_table, write_table
 
 __all__ = ["PSDPopulation", "load_population", "pooled_population", "write_pooled_population",
-           "read_pooled_population", "synthetic_population"]
+           "read_pooled_population", "synthetic_population", "population_dates"]
 
 log = logging.getLogger(__name__)
 
@@ -240,6 +240,21 @@ class PSDPopulation:
                                  "frequency grid or channel set; use one psd configuration for all")
         return cls(np.concatenate([p.psd_mm2_m for p in pops]), first.frequency_per_m,
                    first.channels, pd.concat([p.sections for p in pops], ignore_index=True))
+
+
+def population_dates(all_dates: Sequence[str], date: str, window: str | int) -> list[str]:
+    """Campaigns whose sections form campaign ``date``'s population: every campaign up to and
+    including ``date`` (``window="all"``), or the last ``window`` of them. Never a later one,
+    so a campaign's selection cannot change when a later campaign is added."""
+    earlier = sorted(d for d in all_dates if d <= date)
+    if date not in earlier:
+        raise ValueError(f"campaign {date} is not among the campaigns {list(all_dates)}")
+    if window == "all":
+        return earlier
+    window = int(window)
+    if window < 1:
+        raise ValueError(f"tipm.population_campaigns must be 'all' or >= 1, got {window}")
+    return earlier[-window:]
 
 
 def load_population(paths: Sequence[str | Path], wavelength_band_m) -> list[PSDPopulation]:

@@ -50,6 +50,7 @@ from scipy import stats
 
 from ..jit import kernel
 from .population import PSDPopulation
+from .settings import representative_count
 
 __all__ = ["TIPMSelector", "TIPMSelection", "selection_metrics", "equal_probability_bin_means"]
 
@@ -271,10 +272,7 @@ class TIPMSelector:
         self.search_iterations = int(search_iterations)
 
     def n_samples(self, n_sections: int) -> int:
-        m = max(self.min_samples, int(np.floor(self.fraction * n_sections + 1e-9)))
-        if self.max_samples is not None:
-            m = min(m, self.max_samples)
-        return max(1, min(m, n_sections))
+        return representative_count(n_sections, self.fraction, self.min_samples, self.max_samples)
 
     # -- step 1 -----------------------------------------------------------------------------
     @staticmethod

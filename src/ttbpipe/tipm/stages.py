@@ -15,46 +15,21 @@ import numpy as np
 import pandas as pd
 
 from .. import streams
-from ..configuration import section_defaults, validate_section
 from ..dates import add_months, months_between
-from ..io import read_table
 from .distribution import (FIT_COLUMNS, MIN_SECTIONS_FOR_FIT, SUMMARY_COLUMNS,
                            fit_ordinate_distributions, summarize_fits)
 from .evolution import SpectralEvolution, forecast_coverage
-from .population import PSDPopulation, load_population, pooled_population
+from .population import PSDPopulation, load_population, pooled_population, population_dates
 from .profiles import (STREAM_FORECAST, STREAM_MONTE_CARLO, STREAM_REPRESENTATIVE, date_key,
                        profiles_from_psd_sets)
 from .selection import TIPMSelection, TIPMSelector, selection_metrics
+from .settings import DEFAULTS, resolve_config
 
 __all__ = ["DEFAULTS", "resolve_config", "load_population", "population_dates",
            "select_stage", "profiles_stage", "distribution_stage", "evolution_stage",
            "forecast_base", "sections_as_selection", "forecast_stage", "validation_stage"]
 
 log = logging.getLogger(__name__)
-
-#: Defaults of the ``tipm:`` section: the study schema's (its only home).
-DEFAULTS: dict[str, Any] = section_defaults("tipm")
-
-
-def resolve_config(tipm: Mapping[str, Any] | None) -> dict[str, Any]:
-    """``tipm:`` validated against the study schema, missing keys filled from its defaults."""
-    return validate_section(tipm, "tipm")
-
-
-def population_dates(all_dates: Sequence[str], date: str, window: str | int) -> list[str]:
-    """Campaigns whose sections form campaign ``date``'s population: every campaign up to and
-    including ``date`` (``window="all"``), or the last ``window`` of them. Never a later one,
-    so a campaign's selection cannot change when a later campaign is added."""
-    earlier = sorted(d for d in all_dates if d <= date)
-    if date not in earlier:
-        raise ValueError(f"campaign {date} is not among the campaigns {list(all_dates)}")
-    if window == "all":
-        return earlier
-    window = int(window)
-    if window < 1:
-        raise ValueError(f"tipm.population_campaigns must be 'all' or >= 1, got {window}")
-    return earlier[-window:]
-
 
 def selector_from_config(cfg: Mapping[str, Any]) -> TIPMSelector:
     """The TIPM selector of a resolved ``tipm:`` section."""
