@@ -8,6 +8,8 @@
 * :mod:`.evolution`    -- spectral evolution between campaigns, eqs. 50-56
   (:class:`SpectralEvolution`);
 * :mod:`.profiles`     -- space-domain profiles of representative and forecast sets (seeded);
+* :mod:`.settings`     -- the ``tipm:`` section (defaults, validation) and the number of
+  representative sets, without the fitting modules (the Snakefile plans with it);
 * :mod:`.stages`       -- what the workflow scripts call (workflow/rules/tipm.smk);
 * :mod:`.plots`        -- figures.
 
