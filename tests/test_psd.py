@@ -241,3 +241,45 @@ def test_plot_psd_vs_standard(tmp_path, synthetic_campaign):
         assert len(ax.collections) >= 1  # percentile band
     path = save_figure(fig, tmp_path / "psd.png")
     assert path.stat().st_size > 10_000
+
+
+def _section_matrix_reference(tables, channel, grid):
+    """Obviously correct: one pandas group per section, each sorted by frequency."""
+    rows, freq = [], grid
+    for table in tables.values():
+        for _, section in table[table["channel"] == channel].groupby("section"):
+            section = section.sort_values("spatial_frequency_per_m")
+            f = section["spatial_frequency_per_m"].to_numpy()
+            p = section["psd_mm2_m"].to_numpy()
+            if grid is None:
+                freq = f
+                rows.append(p)
+            else:
+                ok = (f > 0) & (p > 0)
+                rows.append(np.exp(np.interp(np.log(grid), np.log(f[ok]), np.log(p[ok]),
+                                             left=np.nan, right=np.nan)))
+    return np.asarray(freq), np.vstack(rows)
+
+
+@pytest.mark.parametrize("common_grid", [False, True])
+def test_section_matrix_equals_the_per_section_groups(synthetic_campaign, common_grid):
+    """The figure's section matrix (one sort per table) equals the per-section pandas groups
+    bit for bit, rows shuffled and section labels out of order; on a common grid too, where
+    sections interpolate onto it and the percentile band then skips NaN."""
+    from ttbpipe.irregularity.plots import _section_matrix
+
+    table = section_psds(synthetic_campaign, 500.0, 250.0, wavelength_band_m=(2.0, 200.0))
+    rng = np.random.default_rng(7)
+    shuffled = table.sample(frac=1.0, random_state=3).reset_index(drop=True)
+    relabelled = table.assign(section=table["section"].max() - table["section"],
+                              psd_mm2_m=table["psd_mm2_m"] * rng.uniform(0.5, 2.0, len(table)))
+    tables = {"2024-01-15": shuffled, "2024-02-15": relabelled}
+    freq = np.sort(table["spatial_frequency_per_m"].unique())
+    grid = np.geomspace(freq[freq > 0][0] * 0.9, freq[-1], 50) if common_grid else None
+    for channel in SPECTRAL_CHANNELS:
+        got_f, got = _section_matrix(tables, channel, grid)
+        want_f, want = _section_matrix_reference(tables, channel, grid)
+        assert got.shape == want.shape and got.shape[0] == 2 * table["section"].nunique()
+        np.testing.assert_array_equal(got_f, want_f)
+        np.testing.assert_array_equal(got, want)
+        assert np.isnan(got).any() == common_grid   # the grid starts below the sections' range
