@@ -54,12 +54,10 @@ def _section_matrix(tables: Mapping[str, pd.DataFrame], channel: str, grid: np.n
         sub = table.loc[table["channel"] == channel, ["section", "spatial_frequency_per_m",
                                                       "psd_mm2_m"]]
         sub = sub.sort_values(["section", "spatial_frequency_per_m"], kind="stable")
-        sections = sub["section"].to_numpy()
-        starts = np.flatnonzero(np.r_[True, sections[1:] != sections[:-1]]) if len(sub) else []
-        bounds = zip(starts, [*starts[1:], len(sub)])
+        _, starts = np.unique(sub["section"].to_numpy(), return_index=True)   # rows are sorted
         freq_all = sub["spatial_frequency_per_m"].to_numpy()
         psd_all = sub["psd_mm2_m"].to_numpy()
-        for start, stop in bounds:
+        for start, stop in zip(starts, [*starts[1:], len(sub)]):
             f, p = freq_all[start:stop], psd_all[start:stop]
             if grid is None:
                 freq = f
