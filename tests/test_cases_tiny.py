@@ -6,6 +6,11 @@ from its configuration file (config/case2.yaml, config/case3.yaml, config/case4.
 the study, the aggregation and the comparison rule to the tables, the summary and the paper's
 figures, with the counts the configuration asks for and finite numbers. With 2-5 samples a
 scenario the spreads themselves are noise, so no statistical conclusion is asserted here.
+
+The cases' bridges and trains are shrunk (:data:`SHRUNK_MODEL`: one 32 m span, 40 m approaches, a
+motor and a trailer car), which leaves every rule, scenario and figure of the pipeline in place
+and makes a coupled run about a second instead of five to ten: the paper's layouts themselves run
+in the small variants and in docs/validation.md.
 """
 
 from __future__ import annotations
@@ -17,6 +22,17 @@ import pytest
 from test_cases_small import run_case
 
 pytestmark = pytest.mark.slow
+
+#: Merged into each tiny case's overlay: one span and two cars, far below the paper's layouts.
+SHRUNK_MODEL = """\
+structure:
+  layout:
+    approach_length_m: 40.0
+    spans_m: [32.0]
+simulation:
+  train:
+    composition: [motor, trailer]
+"""
 
 CASE2_TINY = """\
 results_dir: results/case2_tiny
@@ -66,7 +82,7 @@ def _figures_written(out, *names: str) -> bool:
 
 
 def test_case2_pipeline_writes_fig10_table1_and_figures(tmp_path):
-    out = run_case(tmp_path, 2, overlay=CASE2_TINY, name="case2_tiny")
+    out = run_case(tmp_path, 2, overlay=CASE2_TINY + SHRUNK_MODEL, name="case2_tiny")
     summary = (out / "summary.md").read_text()
     assert "Samples per scenario: C1 2, C2 2, C3 2, C4 2, C4_mc 3" in summary
     comparison = pd.read_parquet(out / "comparison.parquet")
@@ -84,7 +100,7 @@ def test_case2_pipeline_writes_fig10_table1_and_figures(tmp_path):
 
 
 def test_case3_pipeline_writes_tipm_mc_single_comparison_and_figures(tmp_path):
-    out = run_case(tmp_path, 3, overlay=CASE3_TINY, name="case3_tiny")
+    out = run_case(tmp_path, 3, overlay=CASE3_TINY + SHRUNK_MODEL, name="case3_tiny")
     summary = (out / "summary.md").read_text()
     # 3 campaigns x 10 one-kilometre sections: floor(0.1 x 30) = 3 TIPM sets, raised to the
     # configured minimum of 5 (tipm.selection.min_samples)
@@ -106,7 +122,7 @@ def test_case3_pipeline_writes_tipm_mc_single_comparison_and_figures(tmp_path):
 
 
 def test_case4_pipeline_writes_forecast_levels_and_figure(tmp_path):
-    out = run_case(tmp_path, 4, overlay=CASE4_TINY, name="case4_tiny")
+    out = run_case(tmp_path, 4, overlay=CASE4_TINY + SHRUNK_MODEL, name="case4_tiny")
     comparison = pd.read_parquet(out / "comparison.parquet")
     for quantity in ("max_wheel_vertical_force_N", "max_deck_vertical_acc_m_s2"):
         rows = comparison[comparison["quantity"] == quantity]
