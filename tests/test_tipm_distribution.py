@@ -6,7 +6,8 @@ import pytest
 from scipy import stats
 
 from ttbpipe.tipm import PSDPopulation
-from ttbpipe.tipm.distribution import _anderson_darling, fit_ordinate_distributions, summarize_fits
+from ttbpipe.tipm.distribution import (_anderson_darling, _kolmogorov_smirnov,
+                                       fit_ordinate_distributions, summarize_fits)
 
 FREQ = np.array([0.01, 0.02, 0.03, 0.04, 0.05, 0.06])
 
@@ -52,6 +53,25 @@ def test_anderson_darling_statistic_matches_scipy():
     x = np.random.default_rng(5).normal(1.0, 2.0, size=60)
     ours = _anderson_darling(stats.norm(x.mean(), x.std(ddof=1)).cdf(x))
     assert ours == pytest.approx(stats.anderson(x, "norm", method="interpolate").statistic, rel=1e-9)
+
+
+@pytest.mark.parametrize("n", [8, 25, 180])
+def test_kolmogorov_smirnov_of_every_row_matches_scipy_kstest(n):
+    """The rows' KS statistic and exact p-value against scipy.stats.kstest called row by row
+    (the reference: the same formula and scipy.stats.kstwo), for samples that fit their CDF well
+    and badly: equal to 1e-12 relative."""
+    rng = np.random.default_rng(n)
+    rows = [rng.lognormal(0.3, 0.8, size=n), rng.gamma(2.0, 1.5, size=n),
+            rng.lognormal(0.0, 2.0, size=n), rng.uniform(0.5, 4.0, size=n)]
+    shapes, scales = np.array([0.8, 1.0, 0.7, 1.2]), np.array([1.3, 2.0, 3.0, 1.0])
+    ordered = np.sort(np.array(rows), axis=1)
+    statistic, pvalue = _kolmogorov_smirnov(
+        stats.lognorm.cdf(ordered, shapes[:, None], scale=scales[:, None]))
+    for r, x in enumerate(rows):
+        reference = stats.kstest(x, stats.lognorm(shapes[r], scale=scales[r]).cdf)
+        assert statistic[r] == pytest.approx(reference.statistic, rel=1e-12)
+        assert pvalue[r] == pytest.approx(reference.pvalue, rel=1e-12, abs=1e-300)
+    assert pvalue.min() < 0.01 < pvalue.max()      # both a rejected and an accepted row
 
 
 def test_summary_shares_and_small_population_error():
