@@ -102,29 +102,28 @@ def fit_ordinate_distributions(population: PSDPopulation,
                                for k in range(ordinates.shape[1])])   # (shape, scale) each
             shape, scale = params[:, 0], params[:, 1]
             ordered = np.sort(ordinates.T, axis=1)             # (frequency, section)
-            ks_stat, ks_p = _kolmogorov_smirnov(
-                dist.cdf(ordered, shape[:, None], loc=0, scale=scale[:, None]))
-            per_family[name] = (shape, scale, ks_stat, ks_p)
+            cdf_sorted = dist.cdf(ordered, shape[:, None], loc=0, scale=scale[:, None])
+            ks_statistic, ks_pvalue = _kolmogorov_smirnov(cdf_sorted)
+            per_family[name] = {"shape": shape, "scale": scale, "ks_statistic": ks_statistic,
+                                "ks_pvalue": ks_pvalue, "cdf_sorted": cdf_sorted}
         for k, freq in enumerate(population.frequency_per_m):
             x = ordinates[:, k]
             fits = []
             for name in families:
                 dist = FAMILIES[name]
-                shape, scale = (float(v[k]) for v in per_family[name][:2])
-                ks_stat, ks_p = (float(v[k]) for v in per_family[name][2:])
+                fitted = per_family[name]
+                shape, scale = float(fitted["shape"][k]), float(fitted["scale"][k])
                 if name == "lognorm":
                     ad = stats.anderson(np.log(x), "norm", method="interpolate")
                     ad_stat, ad_p = float(ad.statistic), float(ad.pvalue)
-                else:
-                    # the distribution's method with the parameters, not a frozen distribution:
-                    # freezing builds its docstring, 1.4 ms a time
-                    ad_stat = _anderson_darling(dist.cdf(x, shape, loc=0, scale=scale))
-                    ad_p = np.nan
+                else:   # the fitted CDF at the sorted sample, as the KS test used it
+                    ad_stat, ad_p = _anderson_darling(fitted["cdf_sorted"][k]), np.nan
                 loglik = float(np.sum(dist.logpdf(x, shape, loc=0, scale=scale)))
                 fits.append({"channel": channel, "spatial_frequency_per_m": float(freq),
                              "wavelength_m": 1.0 / float(freq), "family": name,
                              "shape": shape, "scale": scale,
-                             "ks_statistic": ks_stat, "ks_pvalue": ks_p,
+                             "ks_statistic": float(fitted["ks_statistic"][k]),
+                             "ks_pvalue": float(fitted["ks_pvalue"][k]),
                              "ad_statistic": ad_stat, "ad_pvalue": ad_p,
                              "loglik": loglik, "aic": 4.0 - 2.0 * loglik,
                              "n_sections": int(x.size)})
