@@ -12,8 +12,6 @@ of a linear system. The limits of the models (structure, contact, vehicle, coupl
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 from scipy import sparse
 
@@ -151,15 +149,16 @@ def zhai_critical_time_step(inv_mass, stiffness, damping, rtol: float = 1e-2) ->
     return best
 
 
-@lru_cache(maxsize=256)
 def zhai_critical_omega_dt(zeta: float) -> float:
-    """Largest omega*dt with spectral radius <= 1 (bisection); 2.0 undamped, ~1.81 at zeta 0.05."""
-    def stable(O: float) -> bool:
-        return np.max(np.abs(np.linalg.eigvals(zhai_amplification(O, zeta)))) <= 1.0 + 1e-9
-    lo, hi = 1e-3, 4.0
-    if not stable(lo):
-        return 0.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
-    return lo
+    """Largest omega*dt at which Zhai's scheme (psi = phi = 1/2) is stable on one damped mode.
+
+    Omega_c = 2 (sqrt(1 + 4 zeta^2) - 2 zeta): where a root of the characteristic polynomial of
+    :func:`zhai_amplification`, lambda (lambda - 1)^2 + Omega^2 [(3 lambda - 1)/2 + (lambda - 1/2)
+    (lambda - 1)] + 2 zeta Omega (3 lambda - 1)(lambda - 1)/2, reaches lambda = -1
+    (docs/reference/physics.md section 5): 2.0 undamped, 1.81 at zeta = 0.05, 1/(2 zeta) for a
+    stiff damper. tests/test_vehicle_step_limit.py checks it against the bisection of the
+    amplification matrix's spectral radius (a second method) for zeta in [0, 100]. A negative
+    zeta (round-off of a positive semi-definite damping) counts as 0.
+    """
+    zeta = max(float(zeta), 0.0)
+    return float(2.0 * (np.sqrt(1.0 + 4.0 * zeta * zeta) - 2.0 * zeta))
