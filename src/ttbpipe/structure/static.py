@@ -18,7 +18,14 @@ class StructureStatic:
         _, k_glob, _ = structure_model.matrices()
         self.n = structure_model.n_dof
         self.free = ~np.asarray(structure_model.fixed, dtype=bool)
-        self._lu = spla.splu(k_glob.tocsr()[self.free][:, self.free].tocsc())
+        # K_ff is symmetric positive definite: a symmetric fill-reducing ordering (minimum
+        # degree on K + K^T) and pivots on the diagonal, as for a Cholesky factor. Against
+        # SuperLU's default (COLAMD, partial pivoting) on the default study's structure:
+        # 2.6 times less fill, 18 instead of 43 ms, residual 2.7e-13 instead of 6.8e-13
+        # (docs/performance.md, "Per-sample set-up").
+        self._lu = spla.splu(k_glob.tocsr()[self.free][:, self.free].tocsc(),
+                             permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                             options={"SymmetricMode": True})
 
     def solve(self, nodal_force: np.ndarray) -> np.ndarray:
         """Displacements u with K u = f (u = 0 on fixed DOFs)."""
