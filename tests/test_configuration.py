@@ -150,3 +150,13 @@ def test_snakemake_dry_run_rejects_unknown_keys(tmp_path):
                  "simulation.time_stp_s: unknown key; did you mean 'time_step_s'?",
                  "structure.layout.spans: unknown key; did you mean 'spans_m'?"):
         assert line in text, text[-3000:]
+
+
+def test_packaged_yaml_parses_as_pyyaml_safe_load_does():
+    """The schemas and the train library are read by libyaml's parser where PyYAML has it
+    (load_packaged_yaml): every packaged YAML file gives the same data as yaml.safe_load."""
+    files = sorted((REPO / "src" / "ttbpipe").rglob("*.yaml"))
+    assert any(f.name == "study.schema.yaml" for f in files) and len(files) >= 3
+    for path in files:
+        text = path.read_text(encoding="utf-8")
+        assert configuration.load_packaged_yaml(text) == yaml.safe_load(text), path

@@ -43,9 +43,17 @@ class ConfigurationError(ValueError):
     """An invalid configuration; the message lists every violation with its key path."""
 
 
+def load_packaged_yaml(text: str) -> Any:
+    """A YAML document shipped with the package (schemas, train library), parsed by libyaml's C
+    parser when PyYAML has it, else by PyYAML's own: the same safe constructor and resolver, so
+    the same data; 0.018 instead of 0.15 s for the study schema, which every job reads. Users'
+    files keep ``yaml.safe_load``, whose errors quote the offending line."""
+    return yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+
+
 def _read_schema(name: str) -> dict:
     text = resources.files("ttbpipe").joinpath("schemas", name).read_text()
-    return yaml.safe_load(text) if name.endswith(".yaml") else json.loads(text)
+    return load_packaged_yaml(text) if name.endswith(".yaml") else json.loads(text)
 
 
 def _dataclass_properties(cls: type) -> dict[str, dict]:

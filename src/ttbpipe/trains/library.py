@@ -101,10 +101,10 @@ def car_train_axles(cars) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _read_yaml(name: str) -> dict:
-    import yaml
+    from ..configuration import load_packaged_yaml
 
     text = resources.files("ttbpipe.trains").joinpath(name).read_text(encoding="utf-8")
-    return yaml.safe_load(text)
+    return load_packaged_yaml(text)
 
 
 @lru_cache(maxsize=1)
