@@ -10,6 +10,7 @@ double-track deck and a canted curve.
 """
 
 import copy
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ from ttbpipe.simulation.setup import nominal_structure
 from ttbpipe.structure import CARRIER_PARAMETERS, apply_factors, build_structure, carrier_positions
 from ttbpipe.structure.matrices import assemble_matrices, assemble_matrices_by_element
 
+REPO = Path(__file__).resolve().parents[1]
 SMALL = {"layout": {"approach_length_m": 12.0, "spans_m": [16.0, 12.0],
                     "approach_track": "ballasted"},
          "girder": {"element_length_m": 2.0}}
@@ -67,7 +69,7 @@ def test_vectorised_assembly_on_tall_piers_and_a_double_track_deck():
 
 
 def test_vectorised_assembly_on_the_curved_reference_bridge():
-    case = yaml.safe_load(open("config/curved_bridge.yaml"))
+    case = yaml.safe_load((REPO / "config" / "curved_bridge.yaml").read_text())
     model = nominal_structure(case)
     assert model.cant is not None and model.plan is not None
     _assert_same(model)

@@ -95,13 +95,13 @@ def fit_ordinate_distributions(population: PSDPopulation,
     rows = []
     for c, channel in enumerate(population.channels):
         ordinates = population.psd_mm2_m[:, :, c]            # (section, frequency)
+        ordered = np.sort(ordinates.T, axis=1)                 # (frequency, section)
         per_family = {}
         for name in families:
             dist = FAMILIES[name]
             params = np.array([dist.fit(ordinates[:, k], floc=0)[::2]
                                for k in range(ordinates.shape[1])])   # (shape, scale) each
             shape, scale = params[:, 0], params[:, 1]
-            ordered = np.sort(ordinates.T, axis=1)             # (frequency, section)
             cdf_sorted = dist.cdf(ordered, shape[:, None], loc=0, scale=scale[:, None])
             ks_statistic, ks_pvalue = _kolmogorov_smirnov(cdf_sorted)
             per_family[name] = {"shape": shape, "scale": scale, "ks_statistic": ks_statistic,
