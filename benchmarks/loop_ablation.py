@@ -3,13 +3,15 @@
     NUMBA_NUM_THREADS=1 python benchmarks/loop_ablation.py [--case config/reference_case.yaml]
         [--duration 0.5] [--rounds 4]
 
-A copy of the single-train loop (:func:`ttbpipe.simulation.loop._coupled_loop`, without its
-checks and stops) that can leave out the structure kernel, the monitors, the decimated history
-channels or the structure's Zhai update; the variants run alternately in one process and the
-wall time per step of each is printed (median and minimum over the rounds after the first).
-A part's cost in the loop is the difference to the full variant: it includes the cache misses
-the part causes the others, which timing it alone in a warm loop does not show. Timings only;
-the left-out variants do not compute the same motion.
+A copy of the single-train loop (:func:`ttbpipe.simulation.loop._coupled_loop`) that can leave
+out the structure kernel, the monitors, the decimated history channels or the structure's Zhai
+update; the variants run alternately in one process and the wall time per step of each is
+printed (median and minimum over the rounds after the first). A part's cost in the loop is the
+difference to the full variant: it includes the cache misses the part causes the others, which
+timing it alone in a warm loop does not show. The left-out variants do not compute the same
+motion; the full variant must: before timing, the script runs the case through both loops and
+stops unless every output array and the final state are equal bit for bit (a copy that drifted
+from the loop it copies would time another loop).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 from numba import njit  # noqa: E402
 
+from ttbpipe.decimation import flush  # noqa: E402
 from ttbpipe.jit import KERNEL_OPTIONS  # noqa: E402
 from ttbpipe.simulation import loop as L  # noqa: E402
 from ttbpipe.simulation.coupled import prepare  # noqa: E402
@@ -45,7 +48,8 @@ VARIANTS = {0: "full", 1: "no structure kernel", 2: "no monitors", 3: "no decima
 # compiled as the loop it copies is (not cached: a benchmark)
 @njit(error_model=KERNEL_OPTIONS["error_model"])
 def loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_every, mode):
-    """The coupled loop's step, leaving out the part ``mode`` names (:data:`VARIANTS`)."""
+    """The coupled loop's step (:func:`ttbpipe.simulation.loop._coupled_loop`, its statuses and
+    stops included), leaving out the part ``mode`` names (:data:`VARIANTS`); mode 0 is the loop."""
     vehicle = placed.vehicle
     n_ws = vehicle.ws_dofs.shape[0]
     ws_x = np.zeros(n_ws)
@@ -53,31 +57,87 @@ def loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_
     work = _work(state.q.shape[0], n_ws, N_COLS, max(vehicle.zones.shape[0], 1))
     q, v, a, a_prev = state.q, state.v, state.a, state.a_prev
     disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
-    L._evaluate(0.0, state, placed, work, packed, window, mesh, ws_x, rail_kin, True)
-    out_row = 0
-    for n in range(n_steps):
-        psi = 0.0 if n == 0 else 0.5
-        L._advance(q, v, a, a_prev, dt, psi)
-        if mode != 4:
-            L._advance(disp, vel, acc, acc_prev, dt, psi)
-        t = (n + 1) * dt
-        nf = state.nodal_force
-        for i in range(nf.shape[0]):
-            nf[i] = 0.0
-        L._train_loads(t, state, placed, work, mesh, ws_x, rail_kin, False)
-        if mode != 1:
-            windowed_structure_accelerations(packed, window, disp, vel, nf, acc)
+    L._evaluate(0.0, state, placed, work, packed, window, mesh, ws_x, rail_kin, 0.0)
+    out_row = np.int64(0)
+    for n in range(-1, n_steps):
+        if n >= 0:
+            psi = 0.0 if n == 0 else 0.5
+            L._advance(q, v, a, a_prev, dt, psi)
+            if mode != 4:
+                L._advance(disp, vel, acc, acc_prev, dt, psi)
+            t = (n + 1) * dt
+            nf = state.nodal_force
+            for i in range(nf.shape[0]):
+                nf[i] = 0.0
+            L._move_window(t, state, placed, window)
+            L._train_loads(t, state, placed, work, mesh, ws_x, rail_kin, 1.0)
+            if mode != 1:
+                windowed_structure_accelerations(packed, window, disp, vel, nf, acc)
         step = n + 1
-        record_wheel_step(train, work.wheel, step)
+        if record_wheel_step(train, work.wheel, step) == 0:
+            return 2, n
         if mode != 2:
             record_monitors(monitors, disp, vel, acc)
         if mode != 3:
             record_step_channels(train, monitors.current, work.wheel, q, a)
-        if step % out_every == 0 and out_row < train.t_out.shape[0]:
-            record_vehicle_output(train, out_row, step * dt, q, a)
+        if step % out_every == 0:
+            finite, big = record_vehicle_output(train, out_row, step * dt, q, a)
+            if not finite:
+                return 1, n
+            for i in range(disp.shape[0]):
+                if not np.isfinite(disp[i]):
+                    return 1, n
+            if big > 0.5:
+                return 3, n
             record_wheel_output(train, out_row, work.wheel)
             out_row += 1
-    return 0
+    flush(train.dec)
+    return 0, n_steps
+
+
+def _fresh(setup):
+    """A run's initial state, monitors and recorder, as :func:`ttbpipe.simulation.loop.integrate`
+    makes them."""
+    n_v, n_s = setup.model.n_dof, setup.disp0.shape[0]
+    state = L.CoupledState(setup.q0.copy(), setup.v0.copy(), np.zeros(n_v), np.zeros(n_v),
+                           setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s),
+                           np.zeros(n_s))
+    monitors = setup.monitors.recorder()
+    return state, monitors, L._recorder(setup, monitors.qty.shape[0])
+
+
+def _arrays(obj, prefix=""):
+    """Every numpy array in a (nested) namedtuple, by dotted name."""
+    if isinstance(obj, np.ndarray):
+        return {prefix: obj}
+    out = {}
+    if isinstance(obj, tuple) and hasattr(obj, "_fields"):
+        for name, value in zip(obj._fields, obj):
+            out.update(_arrays(value, f"{prefix}.{name}" if prefix else name))
+    return out
+
+
+def check_full_variant_is_the_loop(setup) -> None:
+    """Run the case through :func:`ttbpipe.simulation.loop._coupled_loop` and through
+    :func:`loop` (mode 0); raise unless the statuses, the final states, the monitors and every
+    recorder array are equal bit for bit."""
+    runs = []
+    for use_copy in (False, True):
+        state, monitors, train = _fresh(setup)
+        args = (state, L._placed(setup), setup.packed, no_window(setup.packed), setup.mesh,
+                monitors, train, setup.dt, setup.n_steps, setup.out_every)
+        status = loop(*args, 0) if use_copy else L._coupled_loop(*args)
+        runs.append((tuple(status), {**_arrays(state, "state"), **_arrays(monitors, "monitors"),
+                                     **_arrays(train, "train")}))
+    (status_loop, loop_arrays), (status_copy, copy_arrays) = runs
+    differ = [name for name in loop_arrays
+              if not np.array_equal(loop_arrays[name], copy_arrays[name], equal_nan=True)]
+    if status_loop != status_copy or differ or loop_arrays.keys() != copy_arrays.keys():
+        raise SystemExit(f"the benchmark's loop is not ttbpipe.simulation.loop._coupled_loop: "
+                         f"status {status_copy} against {status_loop}, arrays that differ: "
+                         f"{', '.join(differ) or 'none'}; update loop() to the loop as it is")
+    print(f"full variant checked: {len(loop_arrays)} arrays equal to _coupled_loop's bit for bit "
+          f"(status {status_loop})")
 
 
 def main() -> None:
@@ -89,15 +149,11 @@ def main() -> None:
     case = yaml.safe_load(Path(args.case).read_text())
     case["simulation"]["duration_s"] = args.duration
     setup = prepare(case)
+    check_full_variant_is_the_loop(setup)
     res = {k: [] for k in VARIANTS}
     for rnd in range(args.rounds):
         for mode in VARIANTS:
-            n_v, n_s = setup.model.n_dof, setup.disp0.shape[0]
-            state = L.CoupledState(setup.q0.copy(), setup.v0.copy(), np.zeros(n_v), np.zeros(n_v),
-                                   setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s),
-                                   np.zeros(n_s), np.zeros(n_s))
-            mon = setup.monitors.recorder()
-            train = L._recorder(setup, mon.qty.shape[0])
+            state, mon, train = _fresh(setup)
             t0 = time.perf_counter()
             loop(state, L._placed(setup), setup.packed, no_window(setup.packed), setup.mesh, mon,
                  train, setup.dt, setup.n_steps, setup.out_every, mode)
