@@ -1,6 +1,6 @@
 """A Monte Carlo batch's population: the campaigns' PSD tables against the pooled table.
 
-    python benchmarks/bench_mc_population.py ROOT [--rounds 3]
+    python benchmarks/mc_population_tables.py ROOT [--rounds 3]
 
 ROOT: a clone in which `snakemake --cores 2 --configfile config/case3.yaml` has written the PSD
 tables (results/case3/psd/*.parquet: paper case 3's 36 campaigns of 85 sections). Pools them
