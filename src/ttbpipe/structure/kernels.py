@@ -156,7 +156,7 @@ def group_triple_entries(tri_ptr, tri_dof, tri_coef):
     return group_end, np.ascontiguousarray(tri_dof[order]), np.ascontiguousarray(coef[order].ravel())
 
 
-@kernel
+@kernel(inline="always")
 def _vertical_sums(dofs, coef, disp, vel, j0, j1, d0, v0):
     """(d0, v0) plus the vertical link's terms of entries [j0, j1) of a link triple."""
     for j in range(j0, j1):
@@ -167,7 +167,7 @@ def _vertical_sums(dofs, coef, disp, vel, j0, j1, d0, v0):
     return d0, v0
 
 
-@kernel
+@kernel(inline="always")
 def _lateral_roll_sums(dofs, coef, disp, vel, j0, j1, d1, d2, v1, v2):
     """(d1, d2, v1, v2) plus the lateral and roll links' terms of entries [j0, j1)."""
     for j in range(j0, j1):
