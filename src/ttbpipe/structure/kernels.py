@@ -156,6 +156,8 @@ def group_triple_entries(tri_ptr, tri_dof, tri_coef):
     return group_end, np.ascontiguousarray(tri_dof[order]), np.ascontiguousarray(coef[order].ravel())
 
 
+# The two group sums are inlined into _triple_forces: called as functions, once or twice per
+# triple, they cost the structure kernel 14 % (docs/performance.md, "Side by side in run_all.py").
 @kernel(inline="always")
 def _vertical_sums(dofs, coef, disp, vel, j0, j1, d0, v0):
     """(d0, v0) plus the vertical link's terms of entries [j0, j1) of a link triple."""
