@@ -4,9 +4,10 @@
         [--duration 0.5] [--rounds 4]
 
 A copy of the single-train loop (:func:`ttbpipe.simulation.loop._coupled_loop`) that can leave
-out the structure kernel, the monitors, the decimated history channels or the structure's Zhai
-update; the variants run alternately in one process and the wall time per step of each is
-printed (median and minimum over the rounds after the first). A part's cost in the loop is the
+out the structure kernel, the monitors, the decimated history channels, the structure's Zhai
+update, the wheel-step records (peaks, contact loss) or the sampled output rows; the variants
+run alternately in one process and the wall time per step of each is printed (median and
+minimum over the rounds after the first). A part's cost in the loop is the
 difference to the full variant: it includes the cache misses the part causes the others, which
 timing it alone in a warm loop does not show. The left-out variants do not compute the same
 motion; the full variant must: before timing, the script runs the case through both loops and
@@ -42,7 +43,7 @@ from ttbpipe.vehicle.kernels import RAIL_KIN_COLS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 VARIANTS = {0: "full", 1: "no structure kernel", 2: "no monitors", 3: "no decimated channels",
-            4: "no structure update"}
+            4: "no structure update", 5: "no wheel-step records", 6: "no output rows"}
 
 
 # compiled as the loop it copies is (not cached: a benchmark)
@@ -74,13 +75,13 @@ def loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_
             if mode != 1:
                 windowed_structure_accelerations(packed, window, disp, vel, nf, acc)
         step = n + 1
-        if record_wheel_step(train, work.wheel, step) == 0:
+        if mode != 5 and record_wheel_step(train, work.wheel, step) == 0:
             return 2, n
         if mode != 2:
             record_monitors(monitors, disp, vel, acc)
         if mode != 3:
             record_step_channels(train, monitors.current, work.wheel, q, a)
-        if step % out_every == 0:
+        if step % out_every == 0 and mode != 6:
             finite, big = record_vehicle_output(train, out_row, step * dt, q, a)
             if not finite:
                 return 1, n
