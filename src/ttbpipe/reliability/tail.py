@@ -53,6 +53,7 @@ rests on the assumed domain of attraction, not on the data.
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -490,13 +491,15 @@ class _GEV:
     def from_logp(self, lp: float, free, z: float):
         """mu from p at z: ``z = mu + sigma ((-log(1-p))^(-xi) - 1)/xi`` (Coles 2001 eq. 3.4).
         The models' ``from_logp`` are the readable form of the compiled profile objective
-        (:func:`_objective`), which tests/test_reliability_tail.py compares with them."""
+        (:func:`_objective`), which tests/test_reliability_tail.py compares with them bit for
+        bit: scalars through ``math`` (the C library, as the compiled code), not numpy, whose
+        SIMD exp, log1p and expm1 differ in the last bits on AVX-512 CPUs."""
         lsig, xi = free
         if not lp < 0.0:
             return None
-        big_l = np.log(-np.log1p(-np.exp(lp)))
-        ratio = -big_l if abs(xi) < _XI_ZERO else np.expm1(-xi * big_l) / xi
-        return np.array([z - np.exp(lsig) * ratio, lsig, xi])
+        big_l = math.log(-math.log1p(-math.exp(lp)))
+        ratio = -big_l if abs(xi) < _XI_ZERO else math.expm1(-xi * big_l) / xi
+        return np.array([z - math.exp(lsig) * ratio, lsig, xi])
 
     def free(self, theta):
         return np.asarray(theta[1:], dtype=float)
@@ -565,8 +568,8 @@ class _Gumbel(_GEV):
         (lsig,) = free
         if not lp < 0.0:
             return None
-        big_l = np.log(-np.log1p(-np.exp(lp)))
-        return np.array([z + np.exp(lsig) * big_l, lsig])
+        big_l = math.log(-math.log1p(-math.exp(lp)))
+        return np.array([z + math.exp(lsig) * big_l, lsig])
 
     def starts(self) -> list[np.ndarray]:
         m = np.average(self.x, weights=self.a)
@@ -615,8 +618,11 @@ class _POT:
                 np.ascontiguousarray(self.e, dtype=float), float(self.xi_min), float(self.u))
 
     def _log_survival(self, lsig, xi, d: float) -> float:
-        l, ok = _log1p_ratio(xi, np.array([d / np.exp(lsig)]))
-        return float(-l[0]) if ok[0] else -np.inf
+        # one value: the compiled objective's own function and the C library's exp, so that
+        # log_p and from_logp give its values bit for bit on every CPU (numpy's SIMD exp and
+        # log1p differ from the C library's in the last bits where the CPU has AVX-512)
+        l = _log1p_over_xi(xi, d / math.exp(lsig))
+        return -np.inf if np.isnan(l) else float(-l)
 
     def log_p(self, theta, z: float) -> float:
         eta, lsig, xi = theta
@@ -627,7 +633,7 @@ class _POT:
         log_zeta = lp - self._log_survival(lsig, xi, z - self.u)
         if not (np.isfinite(log_zeta) and log_zeta < 0.0):
             return None
-        return np.array([log_zeta - np.log(-np.expm1(log_zeta)), lsig, xi])
+        return np.array([log_zeta - math.log(-math.expm1(log_zeta)), lsig, xi])
 
     def free(self, theta):
         return np.asarray(theta[1:], dtype=float)
