@@ -7,12 +7,12 @@ A copy of the single-train loop (:func:`ttbpipe.simulation.loop._coupled_loop`) 
 out the structure kernel, the monitors, the decimated history channels, the structure's Zhai
 update, the wheel-step records (peaks, contact loss) or the sampled output rows; the variants
 run alternately in one process and the wall time per step of each is printed (median and
-minimum over the rounds after the first). A part's cost in the loop is the
-difference to the full variant: it includes the cache misses the part causes the others, which
-timing it alone in a warm loop does not show. The left-out variants do not compute the same
-motion; the full variant must: before timing, the script runs the case through both loops and
-stops unless every output array and the final state are equal bit for bit (a copy that drifted
-from the loop it copies would time another loop).
+minimum over the rounds after the first). A part's cost in the loop is the difference to the
+full variant: it includes the cache misses the part causes the others, which timing it alone in
+a warm loop does not show. The left-out variants do not compute the same motion; the full
+variant must: before timing, the script runs the case through both loops and stops unless
+every output array and the final state are equal bit for bit (a copy that drifted from the loop
+it copies would time another loop).
 """
 
 from __future__ import annotations
