@@ -66,7 +66,7 @@ def decimator(n_channels: int, n_out: int, out_every: int) -> Decimator:
                      np.zeros(n_channels))
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _add_sample(dec, s, values):
     """Add sample s (the first sample's value for s < 0: the history held at its start) to
     every output row whose filter window holds it: row k takes taps[j] x[s] with
@@ -84,7 +84,7 @@ def _add_sample(dec, s, values):
             row[c] += tap * values[c]
 
 
-@kernel
+@kernel(creates_arrays=False)
 def push(dec, values):
     """Push the next sample of every channel; write the output row that becomes due.
 

@@ -62,7 +62,7 @@ def track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin):
     placed_track_kinematics(mesh, track, disp, vel, ws_x, speed, rail_kin, 0, 1)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def placed_track_kinematics(mesh, track, disp, vel, ws_s, speed, rail_kin, rail0, direction):
     """:func:`track_kinematics` of a train on the track whose left rail is ``rail0`` (track k:
     rail 2k), running in ``direction`` +1 (+x) or -1 (-x), in the train's own axes.
@@ -106,7 +106,7 @@ def placed_track_kinematics(mesh, track, disp, vel, ws_s, speed, rail_kin, rail0
                     rail_kin[w, k, 5] = -vr
 
 
-@kernel
+@kernel(creates_arrays=False)
 def add_wheel_loads(mesh, wheel, ws_s, rail0, direction, two_point, nodal_force):
     """Add to ``nodal_force`` the loads of a train's wheels on its rails: the opposite of the
     force of the rail on each wheel (``wheel``: the contact table in the train's axes), with
@@ -143,7 +143,7 @@ PlacedTrain = namedtuple("PlacedTrain", ["vehicle", "track", "speed", "creep_rel
                                          "direction"])
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale):
     """One train at time t: its rail kinematics, accelerations (``state.a``) and wheel table
     (``work.wheel``); adds its wheel loads to ``state.nodal_force``. ``creep_scale``: 0.0 at the
@@ -162,7 +162,7 @@ def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale):
                     vehicle.zones.shape[0] > 0, state.nodal_force)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _move_window(t, state, placed, window):
     """The track window (:mod:`ttbpipe.structure.window`) over the train's wheelsets at time t."""
     if window.n_segments == 0:
@@ -176,7 +176,7 @@ def _move_window(t, state, placed, window):
     update_window(window, x_low, x_high, state.vel, state.acc, state.acc_prev)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _evaluate(t, state, placed, work, packed, window, mesh, ws_x, rail_kin, creep_scale):
     """Accelerations of train and structure at time t for the current displacements and
     velocities (``work.wheel``: the wheel table of this evaluation; :func:`_train_loads`), the
@@ -190,7 +190,7 @@ def _evaluate(t, state, placed, work, packed, window, mesh, ws_x, rail_kin, cree
                                      state.acc)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _advance(u, v, a, a_prev, dt, psi):
     """Zhai's predictor for one system (displacements and velocities at the new step from this
     and the previous step's accelerations; :func:`ttbpipe.timestepping.zhai.zhai_predict`),
@@ -250,7 +250,7 @@ def _coupled_loop(state, placed, packed, window, mesh, monitors, train, dt, n_st
     return 0, n_steps
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _evaluate_pair(t, state, state_b, placed, placed_b, work, work_b, packed, mesh, scratch,
                    creep_scale):
     """Accelerations of two trains and the structure at time t (``state_b`` shares the

@@ -85,7 +85,7 @@ def decimated(rec: TrainRecorder, n_monitors: int) -> dict[str, np.ndarray]:
             "acc": out[:, b:c], "disp": out[:, c:]}
 
 
-@kernel
+@kernel(creates_arrays=False)
 def record_step_channels(rec, monitor_values, wheel, q, a):
     """Push this step's decimated channels (monitors, wheel forces, vehicle DOFs)."""
     values = rec.values
@@ -126,7 +126,7 @@ def derailment_coefficients(lateral_force, vertical_force, in_contact):
     return out
 
 
-@kernel
+@kernel(creates_arrays=False)
 def record_wheel_step(rec, wheel, step):
     """Peaks and contact loss of one step (module docstring); returns the number of wheels in
     contact."""
@@ -166,7 +166,7 @@ def record_wheel_step(rec, wheel, step):
     return in_contact
 
 
-@kernel
+@kernel(creates_arrays=False)
 def record_vehicle_output(rec, row, t, q, a):
     """The vehicle's displacements and accelerations of one output step; returns (finite, the
     largest |displacement| over ``rec.displacement_dofs``), for the loop's divergence checks."""
@@ -182,7 +182,7 @@ def record_vehicle_output(rec, row, t, q, a):
     return True, big
 
 
-@kernel
+@kernel(creates_arrays=False)
 def record_wheel_output(rec, row, wheel):
     """The wheel forces of one output step (:data:`WHEEL_HISTORY_COLUMNS`)."""
     for w in range(wheel.shape[0]):

@@ -64,7 +64,7 @@ def _element_span(ranges, k, n):
     return np.uint64(ranges[k, 0]), np.uint64(end if end >= 0 else n)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _beam_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the elastic forces K_e u_e of every beam element (rails and slab) from ``force``.
 
@@ -101,7 +101,7 @@ def _beam_forces(packed, disp, vel, force, ranges, n_ranges):
             force[b + 4] += kt
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _link_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every spring-damper link from ``force``.
 
@@ -185,7 +185,7 @@ def _lateral_roll_sums(dofs, coef, disp, vel, j0, j1, d1, d2, v1, v2):
     return d1, d2, v1, v2
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every link triple (CA quadrature points; rail pads and ballast have
     compact kernels of their own).
@@ -230,7 +230,7 @@ def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
                 force[dofs[j]] -= coef[3 * j] * p0 + coef[3 * j + 1] * p1 + coef[3 * j + 2] * p2
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _pad_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every rail pad (fastener): vertical, lateral and roll spring-dampers
     between a rail node and its seat (paper eq. 22).
@@ -327,7 +327,7 @@ def _pad_forces(packed, disp, vel, force, ranges, n_ranges):
                 force[sd + 2] += e * pz + pr
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _ballast_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of the ballasted track under the rails (Zhai's model; paper 2.1 (2)).
 
@@ -374,7 +374,7 @@ def _ballast_forces(packed, disp, vel, force, ranges, n_ranges):
 _EVERY_ELEMENT = np.array([[0, -1]], dtype=np.int64)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def structure_accelerations(packed, disp, vel, nodal_force, acc_out):
     """acc_out = M^-1 (nodal_force - K disp - C vel) for the whole structure.
 
@@ -385,7 +385,7 @@ def structure_accelerations(packed, disp, vel, nodal_force, acc_out):
                    _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def windowed_structure_accelerations(packed, window, disp, vel, nodal_force, acc_out):
     """:func:`structure_accelerations` with the track outside a window frozen
     (:mod:`ttbpipe.structure.window`): only the elements in the window's ranges are evaluated
@@ -400,7 +400,7 @@ def windowed_structure_accelerations(packed, window, disp, vel, nodal_force, acc
                    window.ballast_ranges, n[3], window.triple_ranges, n[4])
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _accelerations(packed, disp, vel, nodal_force, acc_out, inv_mass, beams, n_beams, links,
                    n_links, pads, n_pads, ballast, n_ballast, triples, n_triples):
     """The accelerations with the given diagonal inverse mass, evaluating the elements in the

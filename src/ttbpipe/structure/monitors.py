@@ -67,7 +67,7 @@ def no_monitors() -> MonitorRecorder:
     return MonitorRecorder(np.zeros(1, np.int64), i0, f0, i0, f0, f0, np.zeros(0))
 
 
-@kernel
+@kernel(creates_arrays=False)
 def record_monitors(rec, disp, vel, acc):
     """Evaluate every monitor at this step: sum_j coef_j q[dof_j] with q = disp, vel or acc
     (qty 0, 1, 2), times its unit scale, into ``rec.current``; update ``rec.peak``. Returns the

@@ -156,7 +156,7 @@ def track_window(model, margin_m: float, keep_dofs=()) -> TrackWindow:
                        *(_every(e.size // 2 + 2) for e in segments), np.ones(5, dtype=np.int64))
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _element_ranges(segment, segment_on, ranges):
     """The runs of elements to evaluate as rows [start, end) of ``ranges`` (an element with a
     DOF in an active segment: its lowest segment or the next one active; or one that always
@@ -180,7 +180,7 @@ def _element_ranges(segment, segment_on, ranges):
     return rows
 
 
-@kernel
+@kernel(creates_arrays=False)
 def update_window(window, x_low, x_high, vel, acc, acc_prev):
     """Move the window to cover [x_low - margin, x_high + margin] (the train's wheelsets between
     x_low and x_high). DOFs that leave it stop where they are (velocity and accelerations set

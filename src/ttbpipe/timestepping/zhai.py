@@ -18,7 +18,7 @@ from scipy import sparse
 from ..jit import kernel
 
 
-@kernel
+@kernel(creates_arrays=False)
 def zhai_predict(disp, vel, acc, acc_prev, dt, psi, phi):
     """Zhai's explicit two-step update of displacement and velocity, in place.
 

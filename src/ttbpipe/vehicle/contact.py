@@ -596,7 +596,7 @@ def _kalker_linear(xi_x, xi_y, xi_sp, f11, f22, f23, f33):
     return -f11 * xi_x, -f22 * xi_y - f23 * xi_sp, f23 * xi_y - f33 * xi_sp
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _creep_forces(scal, side, normal, radius, a, cos_d, sin_d, xi_y, f11, f22, f23, f33, r0,
                   mu, speed, ws_vyaw, ws_vpitch, semi_a, semi_b):
     """F_x, F_y, M_z of one contact point by the creep law ``scal[SCAL_CREEP_LAW]`` (0
@@ -711,7 +711,7 @@ def _grid_cell(y0: float, y1: float, n: int, y: float):
     return i, s - i
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
     """Linear interpolation of all table columns at y_rel (uniform grid; linear extrapolation
     of r and dz beyond the ends, other columns held)."""
@@ -725,7 +725,7 @@ def _table_row(table: np.ndarray, y_rel: float, out: np.ndarray) -> None:
             out[c] = table[j, c]
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: float,
                    wheelset, rail, row: np.ndarray, out: np.ndarray, creep_y_prev: float = 0.0,
                    creep_relax: float = 0.0) -> float:
@@ -798,7 +798,7 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     return xi_y_state
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _lerp2(zk: np.ndarray, j: int, j1: int, wy: float, i: int, w: float, c: int) -> float:
     """Column ``c`` of one zone's tables (n_yaw, n, N_ZCOLS) at weight ``w`` between rows i and
     i + 1 and weight ``wy`` between yaw layers j and j1 (bilinear)."""
@@ -808,7 +808,7 @@ def _lerp2(zk: np.ndarray, j: int, j1: int, wy: float, i: int, w: float, c: int)
     return lo * (1.0 - wy) + (zk[j1, i, c] * (1.0 - w) + zk[j1, i + 1, c] * w) * wy
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, speed: float,
                           wheelset, rail, pts: np.ndarray, out: np.ndarray,
                           creep_prev: np.ndarray, creep_relax: float) -> None:

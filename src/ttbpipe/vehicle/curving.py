@@ -234,7 +234,7 @@ def no_curve(model) -> CurveArrays:
     return curve_arrays(model, None)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _knot_segment(xk, x):
     """Index i of the knot interval [xk[i], xk[i+1]) holding x (the first or last interval
     beyond the knots)."""
@@ -249,7 +249,7 @@ def _knot_segment(xk, x):
     return lo
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _pose_on_segment(xk, kappa, heading, offset, i, x):
     """(heading, lateral offset) of the centre line at x in knot interval i: the
     piecewise-linear curvature integrated exactly from the knots' heading and offset."""
@@ -259,7 +259,7 @@ def _pose_on_segment(xk, kappa, heading, offset, i, x):
             offset[i] + heading[i] * s + 0.5 * kappa[i] * s * s + dk * s * s * s / 6.0)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _frame_at(curve, x):
     """(curvature, its x-derivative, cant angle, its x-derivative, heading, lateral offset) of
     the track frame at chainage x (linear interpolation; heading and offset integrated
@@ -276,7 +276,7 @@ def _frame_at(curve, x):
     return kappa, dk, theta, dth, heading, offset
 
 
-@kernel
+@kernel(creates_arrays=False)
 def curve_frame(curve, x_lead, speed, q_track, v_track, f_track, ws_yaw_rate):
     """Fill the track frames' poses ``q_track`` and rates ``v_track`` (per vehicle DOF), the
     frame's inertial and gyroscopic loads ``f_track``, and every wheelset's frame yaw rate

@@ -77,7 +77,7 @@ def vehicle_work(vehicle: VehicleArrays) -> VehicleWork:
                  max(vehicle.zones.shape[0], 1))
 
 
-@kernel
+@kernel(creates_arrays=False)
 def vehicle_accelerations(vehicle, work, q, v, rail_kin, speed, creep_relax, a, x_lead):
     """a = M^-1 (f_const + f_contact - K q - C v); ``work.wheel`` holds the wheel table.
 

@@ -22,7 +22,7 @@ N_WHEEL_OUT = 8
 RAIL_KIN_COLS = 6
 
 
-@kernel
+@kernel(creates_arrays=False)
 def csr_matvec_sub(indptr, indices, data, x, out):
     """out -= A x for a CSR matrix A."""
     for i in range(indptr.shape[0] - 1):
@@ -43,7 +43,7 @@ def _train_contact(q, v, ws_dofs, table, scal, zones, speed, rail_kin, force, wh
                   (row, tmp, creep_state, np.zeros((n_pts, N_PTS_COLS))), 0.0, frame_yaw_rate)
 
 
-@kernel
+@kernel(creates_arrays=False)
 def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratch, creep_relax,
                   frame_yaw_rate):
     """Add the contact generalised forces of every wheel to ``force`` and fill ``wheel``.
