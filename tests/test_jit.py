@@ -53,6 +53,8 @@ def test_every_dispatcher_has_the_kernel_options():
     for name, dispatcher in dispatchers.items():
         assert dispatcher.targetoptions["error_model"] == KERNEL_OPTIONS["error_model"], name
         assert dispatcher._cache.__class__.__name__ == "FunctionCache", name   # cache=True
+        # set, not inherited from the kernel whose compilation first calls it (ttbpipe.jit)
+        assert dispatcher.targetoptions["_nrt"] in (True, False), name
 
 
 def test_division_by_zero_follows_numpy():
@@ -70,8 +72,8 @@ def test_division_by_zero_follows_numpy():
     assert divide(-7.0, 2.0, -7, 2) == (-3.5, -7 // 2, -7 % 2)     # Python's floor rules kept
 
 
-#: The kernels the coupled loop calls at every time step (``ttbpipe.simulation.loop``), which
-#: borrow the arrays they are given (``@kernel(creates_arrays=False)``).
+#: The kernels the coupled loop calls at every time step (``ttbpipe.simulation.loop``) and the
+#: moving-load loop, which borrow the arrays they are given (``@kernel(creates_arrays=False)``).
 STEP_KERNELS = {
     "ttbpipe.simulation.loop": ["placed_track_kinematics", "add_wheel_loads", "_train_loads",
                                 "_move_window", "_evaluate", "_advance", "_evaluate_pair"],
@@ -89,6 +91,7 @@ STEP_KERNELS = {
                                     "record_vehicle_output", "record_wheel_output"],
     "ttbpipe.decimation": ["_add_sample", "push"],
     "ttbpipe.timestepping.zhai": ["zhai_predict"],
+    "ttbpipe.structure.moving_loads": ["_moving_load_loop"],
 }
 
 

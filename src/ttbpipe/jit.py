@@ -32,8 +32,10 @@ def kernel(function=None, *, creates_arrays=True, **options):
     """``numba.njit`` with :data:`KERNEL_OPTIONS`: ``@kernel``, ``@kernel(inline="always")``
     or ``@kernel(creates_arrays=False)`` (a kernel without reference counting, module
     docstring); further options are added to them or replace them."""
+    # _nrt set either way: numba lets a kernel without it inherit the setting of the kernel
+    # whose compilation first calls it, so a kernel that creates arrays, first compiled from
+    # a borrowing one, would be refused
+    options["_nrt"] = bool(creates_arrays)
     if function is None:
-        if not creates_arrays:
-            options["_nrt"] = False
         return njit(**{**KERNEL_OPTIONS, **options})
-    return njit(**KERNEL_OPTIONS)(function)
+    return njit(**KERNEL_OPTIONS, **options)(function)

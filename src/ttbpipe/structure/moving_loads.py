@@ -219,7 +219,7 @@ LoadArrays = namedtuple("LoadArrays", ["rail", "x0", "speed", "F0", "F1", "freq"
 StructureState = namedtuple("StructureState", ["disp", "vel", "acc", "acc_prev", "nodal_force"])
 
 
-@kernel
+@kernel(creates_arrays=False)
 def _moving_load_loop(packed, mesh, loads, state, rec, dec, dt, n_steps, blowup_m):
     """Zhai time loop with moving point loads on the rails; records the monitors at every step
     into the anti-alias decimator ``dec`` (its rows: t = k out_every dt).
