@@ -196,8 +196,6 @@ def _advance(u, v, a, a_prev, dt, psi):
     and the previous step's accelerations; :func:`ttbpipe.timestepping.zhai.zhai_predict`),
     then this step's accelerations become the previous ones."""
     zhai_predict(u, v, a, a_prev, dt, psi, psi)
-    for i in range(a.shape[0]):
-        a_prev[i] = a[i]
 
 
 @kernel

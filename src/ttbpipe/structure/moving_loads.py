@@ -237,8 +237,6 @@ def _moving_load_loop(packed, mesh, loads, state, rec, dec, dt, n_steps, blowup_
         if step > 0:
             psi = 0.0 if step == 1 else 0.5
             zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
-            for i in range(disp.shape[0]):
-                acc_prev[i] = acc[i]
         for i in range(nodal_force.shape[0]):
             nodal_force[i] = 0.0
         for i in range(n_loads):

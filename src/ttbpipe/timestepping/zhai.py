@@ -20,11 +20,14 @@ from ..jit import kernel
 
 @kernel(creates_arrays=False)
 def zhai_predict(disp, vel, acc, acc_prev, dt, psi, phi):
-    """Zhai's explicit two-step update of displacement and velocity, in place.
+    """Zhai's explicit two-step update of displacement and velocity, in place; the step's
+    accelerations then become the previous ones (``acc_prev`` = ``acc``), ready for the
+    accelerations of the new step.
 
     X_{n+1} = X_n + V_n dt + (1/2 + psi) A_n dt^2 - psi A_{n-1} dt^2,
     V_{n+1} = V_n + (1 + phi) A_n dt - phi A_{n-1} dt   (Zhai 1996, IJNME 39:4199;
-    physics.md section 5). psi = phi = 0 on the first step, 1/2 afterwards.
+    physics.md section 5). psi = phi = 0 on the first step, 1/2 afterwards. One pass over
+    the arrays: the shift in a loop of its own cost the reference case's step 1-2 %.
     """
     h2 = dt * dt
     ca = (0.5 + psi) * h2
@@ -36,6 +39,7 @@ def zhai_predict(disp, vel, acc, acc_prev, dt, psi, phi):
         ap = acc_prev[i]
         disp[i] += vel[i] * dt + ca * a - cp * ap
         vel[i] += va * a - vp * ap
+        acc_prev[i] = a
 
 
 def zhai_amplification(omega_dt: float, zeta: float, psi: float = 0.5,
