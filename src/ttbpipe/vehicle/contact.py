@@ -113,7 +113,8 @@ def _hertz_force(penetration: float, g: float) -> float:
     """Hertz normal force (N) for a penetration (m); 0 when the wheel has left the rail."""
     if penetration <= 0.0:
         return 0.0
-    return (penetration / g) ** 1.5
+    ratio = penetration / g
+    return ratio * np.sqrt(ratio)
 
 
 def hertz_stiffness(load: float, g: float) -> float:
@@ -769,11 +770,11 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
     xi_y_state = xi_y
     if normal > 0.0:
-        c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * row[6])) ** (1.0 / 3.0)
+        c = np.cbrt(3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * row[6]))
         ab = row[4] * row[5] * c * c
         f11 = g_shear * ab * row[7]
         f22 = g_shear * ab * row[8]
-        f23 = g_shear * ab ** 1.5 * row[9]
+        f23 = g_shear * (ab * np.sqrt(ab)) * row[9]
         f33 = g_shear * ab * ab * row[10]
         if creep_relax > 0.0:
             g = f22 * creep_relax
@@ -906,7 +907,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         if normal <= 0.0:
             continue
         absum = _lerp2(zk, j, j1, wy, ih, wh, COL_ABSUM)
-        c = (3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * absum)) ** (1.0 / 3.0)
+        c = np.cbrt(3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * absum))
         m_k = _lerp2(zk, j, j1, wy, ih, wh, COL_M)
         n_k = _lerp2(zk, j, j1, wy, ih, wh, COL_N)
         ab = m_k * n_k * c * c
@@ -920,7 +921,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         pts[k, 4] = lever
         pts[k, 5] = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C11)
         pts[k, 6] = f22
-        pts[k, 7] = g_shear * ab ** 1.5 * _lerp2(zk, j, j1, wy, ih, wh, COL_C23)
+        pts[k, 7] = g_shear * (ab * np.sqrt(ab)) * _lerp2(zk, j, j1, wy, ih, wh, COL_C23)
         pts[k, 8] = g_shear * ab * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C33)
         pts[k, 9] = cos_d
         pts[k, 12] = lead_sign * _lerp2(zk, j, j1, wy, ih, wh, COL_LEAD)
