@@ -117,6 +117,18 @@ def _hertz_force(penetration: float, g: float) -> float:
     return ratio * np.sqrt(ratio)
 
 
+@kernel(inline="always")
+def _contact_ellipse(normal, poisson, youngs_modulus, curvature_sum, m, n):
+    """Hertz contact ellipse at normal load N: (c, ab, (ab)^1.5), the semi-axes a = m c and
+    b = n c with c = (3 N (1 - nu^2) / (2 E (A + B)))^(1/3) (Hertz; Johnson, Contact Mechanics,
+    1985, section 4.2). The one home of the Kalker coefficients' load dependence, for the
+    kernels and :func:`creep_coefficients`: a cube and a square root, not libm's ``pow``
+    (which cost the reference case's step 3 %, docs/performance.md)."""
+    c = np.cbrt(3.0 * normal * (1.0 - poisson * poisson) / (2.0 * youngs_modulus * curvature_sum))
+    ab = m * n * c * c
+    return c, ab, ab * np.sqrt(ab)
+
+
 def hertz_stiffness(load: float, g: float) -> float:
     """Linearised Hertz stiffness dP/d(dZ) = 1.5 P^(1/3) / G (N/m) at normal load P (N)."""
     return 1.5 * load ** (1.0 / 3.0) / g
@@ -534,10 +546,10 @@ def creep_coefficients(geom: "ContactGeometry", load: float,
     """Kalker coefficients f11, f22, f23, f33 at normal load ``load`` (N) on table row ``row``
     (default: the centre row, y_rel = 0), as :func:`_wheel_contact` computes them."""
     tab = geom.table[geom.table.shape[0] // 2] if row is None else row
-    c = (3.0 * load * (1 - geom.poisson ** 2) / (2 * geom.youngs_modulus * tab[COL_ABSUM])) ** (1 / 3)
-    ab = tab[COL_M] * tab[COL_N] * c * c
+    _, ab, ab_15 = _contact_ellipse(float(load), geom.poisson, geom.youngs_modulus,
+                                    float(tab[COL_ABSUM]), float(tab[COL_M]), float(tab[COL_N]))
     g = geom.shear_modulus
-    return g * ab * tab[COL_C11], g * ab * tab[COL_C22], g * ab ** 1.5 * tab[COL_C23], \
+    return g * ab * tab[COL_C11], g * ab * tab[COL_C22], g * ab_15 * tab[COL_C23], \
         g * ab * ab * tab[COL_C33]
 
 
@@ -770,11 +782,10 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     xi_y = (v_lat * cos_d + side * v_ver * sin_d) / speed
     xi_y_state = xi_y
     if normal > 0.0:
-        c = np.cbrt(3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * row[6]))
-        ab = row[4] * row[5] * c * c
+        c, ab, ab_15 = _contact_ellipse(normal, nu, e_mod, row[6], row[4], row[5])
         f11 = g_shear * ab * row[7]
         f22 = g_shear * ab * row[8]
-        f23 = g_shear * (ab * np.sqrt(ab)) * row[9]
+        f23 = g_shear * ab_15 * row[9]
         f33 = g_shear * ab * ab * row[10]
         if creep_relax > 0.0:
             g = f22 * creep_relax
@@ -907,10 +918,9 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         if normal <= 0.0:
             continue
         absum = _lerp2(zk, j, j1, wy, ih, wh, COL_ABSUM)
-        c = np.cbrt(3.0 * normal * (1.0 - nu * nu) / (2.0 * e_mod * absum))
         m_k = _lerp2(zk, j, j1, wy, ih, wh, COL_M)
         n_k = _lerp2(zk, j, j1, wy, ih, wh, COL_N)
-        ab = m_k * n_k * c * c
+        c, ab, ab_15 = _contact_ellipse(normal, nu, e_mod, absum, m_k, n_k)
         pts[k, 10] = m_k * c
         pts[k, 11] = n_k * c
         f22 = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C22)
@@ -921,7 +931,7 @@ def _wheel_contact_points(side: float, zones: np.ndarray, scal: np.ndarray, spee
         pts[k, 4] = lever
         pts[k, 5] = g_shear * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C11)
         pts[k, 6] = f22
-        pts[k, 7] = g_shear * (ab * np.sqrt(ab)) * _lerp2(zk, j, j1, wy, ih, wh, COL_C23)
+        pts[k, 7] = g_shear * ab_15 * _lerp2(zk, j, j1, wy, ih, wh, COL_C23)
         pts[k, 8] = g_shear * ab * ab * _lerp2(zk, j, j1, wy, ih, wh, COL_C33)
         pts[k, 9] = cos_d
         pts[k, 12] = lead_sign * _lerp2(zk, j, j1, wy, ih, wh, COL_LEAD)
