@@ -5,6 +5,7 @@
 * add_rail_point_load is the transpose of rail_point_kinematics (virtual work, exact to 1e-12).
 * Hermite interpolation reproduces a cubic exactly (shape-function property).
 * Zhai's stability limit omega*dt = 2.0 undamped and 1.81 at zeta = 0.05 (physics.md section 5).
+* The beam kernel's chain form == element by element, bit for bit (same terms, same order).
 """
 
 import numpy as np
@@ -160,3 +161,50 @@ def test_triple_kernel_skips_only_zero_coefficients(model):
     _triple_forces(general, u, v, force, _EVERY_ELEMENT, 1)
     ref = _dense_triple_forces(general, u, v)
     assert np.max(np.abs(force - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+def _element_by_element_beam_forces(packed, disp, force, elements):
+    """Slow reference of the beams: each element's end forces read from and written to
+    ``force`` in turn, in the given order (the kernel's form before it carried the shared node
+    along a chain)."""
+    for e in elements:
+        a, b, L = int(packed.beam_dof_a[e]), int(packed.beam_dof_b[e]), float(packed.beam_L[e])
+        for off, EI in ((0, packed.beam_EIv[e]), (2, packed.beam_EIl[e])):
+            s = float(EI) / (L * L * L)
+            w1, t1, w2, t2 = disp[a + off], disp[a + off + 1], disp[b + off], disp[b + off + 1]
+            dw = w1 - w2
+            force[a + off] -= s * (12.0 * dw + 6.0 * L * (t1 + t2))
+            force[a + off + 1] -= s * L * (6.0 * dw + L * (4.0 * t1 + 2.0 * t2))
+            force[b + off] += s * (12.0 * dw + 6.0 * L * (t1 + t2))
+            force[b + off + 1] -= s * L * (6.0 * dw + L * (2.0 * t1 + 4.0 * t2))
+        kt = float(packed.beam_GK[e]) / L * (disp[a + 4] - disp[b + 4])
+        force[a + 4] -= kt
+        force[b + 4] += kt
+
+
+@pytest.mark.parametrize("ranges", [[[0, -1]], [[0, 5], [7, 20], [31, -1]], [[3, 4], [4, 9]]])
+def test_beam_chain_matches_element_by_element(model, ranges):
+    """The beam kernel carries the shared node of consecutive elements in registers
+    (``_beam_forces``); every force must get the same terms in the same order as element by
+    element, so the two agree bit for bit: over every element, over ranges that cut the
+    chains (a moving window's), and with the elements shuffled so that no pair chains."""
+    from ttbpipe.structure.kernels import _beam_forces
+
+    packed = model.packed
+    n_beam = packed.beam_L.size
+    a, b = packed.beam_dof_a, packed.beam_dof_b
+    assert (a[1:] == b[:-1]).mean() > 0.9                       # the rails and slab do chain
+    rng = np.random.default_rng(11)
+    u = rng.normal(size=packed.n_dof)
+    f0 = rng.normal(size=packed.n_dof)
+    rows = np.array(ranges, dtype=np.int64)
+    elements = [e for r0, r1 in ranges for e in range(r0, n_beam if r1 < 0 else r1)]
+    shuffled = rng.permutation(n_beam)
+    for pk in (packed, packed._replace(**{name: getattr(packed, name)[shuffled] for name in (
+            "beam_dof_a", "beam_dof_b", "beam_L", "beam_EIv", "beam_EIl", "beam_GK")})):
+        force = f0.copy()
+        _beam_forces(pk, u, u, force, rows, rows.shape[0])
+        ref = f0.copy()
+        _element_by_element_beam_forces(pk, u, ref, elements)
+        assert np.array_equal(force, ref)
+        assert not np.array_equal(force, f0)
