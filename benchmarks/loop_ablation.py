@@ -34,7 +34,7 @@ from ttbpipe.simulation import loop as L  # noqa: E402
 from ttbpipe.simulation.coupled import prepare  # noqa: E402
 from ttbpipe.simulation.recorder import (record_step_channels, record_vehicle_output,  # noqa: E402
                                          record_wheel_output, record_wheel_step)
-from ttbpipe.structure.kernels import windowed_structure_accelerations  # noqa: E402
+from ttbpipe.structure.kernels import windowed_accelerations_in_place  # noqa: E402
 from ttbpipe.structure.monitors import record_monitors  # noqa: E402
 from ttbpipe.structure.window import no_window  # noqa: E402
 from ttbpipe.vehicle.contact import N_COLS  # noqa: E402
@@ -67,13 +67,15 @@ def loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_
             if mode != 4:
                 L._advance(disp, vel, acc, acc_prev, dt, psi)
             t = (n + 1) * dt
-            nf = state.nodal_force
-            for i in range(nf.shape[0]):
-                nf[i] = 0.0
+            for i in range(acc.shape[0]):
+                acc[i] = 0.0
             L._move_window(t, state, placed, window)
             L._train_loads(t, state, placed, work, mesh, ws_x, rail_kin, 1.0)
             if mode != 1:
-                windowed_structure_accelerations(packed, window, disp, vel, nf, acc)
+                windowed_accelerations_in_place(packed, window, disp, vel, acc)
+            else:   # without the kernel the loads must not stand in for accelerations
+                for i in range(acc.shape[0]):
+                    acc[i] = 0.0
         step = n + 1
         if mode != 5 and record_wheel_step(train, work.wheel, step) == 0:
             return 2, n
@@ -101,8 +103,7 @@ def _fresh(setup):
     makes them."""
     n_v, n_s = setup.model.n_dof, setup.disp0.shape[0]
     state = L.CoupledState(setup.q0.copy(), setup.v0.copy(), np.zeros(n_v), np.zeros(n_v),
-                           setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s),
-                           np.zeros(n_s))
+                           setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s))
     monitors = setup.monitors.recorder()
     return state, monitors, L._recorder(setup, monitors.qty.shape[0])
 

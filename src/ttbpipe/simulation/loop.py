@@ -26,7 +26,7 @@ import numpy as np
 
 from ..irregularity.track_input import irregularity_at
 from ..jit import kernel
-from ..structure.kernels import structure_accelerations, windowed_structure_accelerations
+from ..structure.kernels import structure_accelerations_in_place, windowed_accelerations_in_place
 from ..structure.monitors import no_monitors, record_monitors
 from ..structure.rail_mesh import add_rail_contact_load, add_rail_head_load, rail_point_kinematics
 from ..structure.window import no_window, track_window, update_window
@@ -47,9 +47,10 @@ STATUS_MESSAGES = {
 }
 
 #: State of the coupled system: vehicle displacements, velocities, accelerations (this and the
-#: previous step), the same for the structure, and the structure's external nodal loads.
+#: previous step), the same for the structure. An evaluation clears the structure's ``acc``, adds
+#: the wheel loads to it and the structure kernel turns them into accelerations in place.
 CoupledState = namedtuple("CoupledState", ["q", "v", "a", "a_prev", "disp", "vel", "acc",
-                                           "acc_prev", "nodal_force"])
+                                           "acc_prev"])
 
 
 @kernel
@@ -146,7 +147,7 @@ PlacedTrain = namedtuple("PlacedTrain", ["vehicle", "track", "speed", "creep_rel
 @kernel(creates_arrays=False)
 def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale):
     """One train at time t: its rail kinematics, accelerations (``state.a``) and wheel table
-    (``work.wheel``); adds its wheel loads to ``state.nodal_force``. ``creep_scale``: 0.0 at the
+    (``work.wheel``); adds its wheel loads to ``state.acc`` (the structure's loads). ``creep_scale``: 0.0 at the
     evaluation at t = 0 (explicit creep law, as :func:`_coupled_loop`), 1.0 after it.
 
     A float rather than a bool: numba compiles a separate copy of every caller for each
@@ -159,7 +160,7 @@ def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale):
     vehicle_accelerations(vehicle, work, state.q, state.v, rail_kin, placed.speed,
                           creep_scale * placed.creep_relax, state.a, ws_s[0])
     add_wheel_loads(mesh, work.wheel, ws_s, placed.rail0, placed.direction,
-                    vehicle.zones.shape[0] > 0, state.nodal_force)
+                    vehicle.zones.shape[0] > 0, state.acc)
 
 
 @kernel(creates_arrays=False)
@@ -181,13 +182,12 @@ def _evaluate(t, state, placed, work, packed, window, mesh, ws_x, rail_kin, cree
     """Accelerations of train and structure at time t for the current displacements and
     velocities (``work.wheel``: the wheel table of this evaluation; :func:`_train_loads`), the
     track outside ``window`` frozen."""
-    nodal_force = state.nodal_force
-    for i in range(nodal_force.shape[0]):
-        nodal_force[i] = 0.0
+    acc = state.acc
+    for i in range(acc.shape[0]):
+        acc[i] = 0.0
     _move_window(t, state, placed, window)
     _train_loads(t, state, placed, work, mesh, ws_x, rail_kin, creep_scale)
-    windowed_structure_accelerations(packed, window, state.disp, state.vel, nodal_force,
-                                     state.acc)
+    windowed_accelerations_in_place(packed, window, state.disp, state.vel, acc)
 
 
 @kernel(creates_arrays=False)
@@ -253,13 +253,13 @@ def _evaluate_pair(t, state, state_b, placed, placed_b, work, work_b, packed, me
                    creep_scale):
     """Accelerations of two trains and the structure at time t (``state_b`` shares the
     structure's arrays with ``state``); ``scratch`` = (ws_s, rail_kin) of each train."""
-    nodal_force = state.nodal_force
-    for i in range(nodal_force.shape[0]):
-        nodal_force[i] = 0.0
+    acc = state.acc
+    for i in range(acc.shape[0]):
+        acc[i] = 0.0
     ws_s, rail_kin, ws_s_b, rail_kin_b = scratch
     _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale)
     _train_loads(t, state_b, placed_b, work_b, mesh, ws_s_b, rail_kin_b, creep_scale)
-    structure_accelerations(packed, state.disp, state.vel, nodal_force, state.acc)
+    structure_accelerations_in_place(packed, state.disp, state.vel, acc)
 
 
 @kernel
@@ -420,8 +420,7 @@ def _integrate_pair(setup) -> RawResult:
     """:func:`integrate` of a two-train run (``setup.second``)."""
     second = setup.second
     n_s = setup.disp0.shape[0]
-    structure = (setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s),
-                 np.zeros(n_s))
+    structure = (setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s))
     states = []
     for s in (setup, second):
         n_v = s.model.n_dof
@@ -451,8 +450,7 @@ def integrate(setup) -> RawResult:
     n_v = setup.model.n_dof
     n_s = setup.disp0.shape[0]
     state = CoupledState(setup.q0.copy(), setup.v0.copy(), np.zeros(n_v), np.zeros(n_v),
-                         setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s),
-                         np.zeros(n_s))
+                         setup.disp0.copy(), np.zeros(n_s), np.zeros(n_s), np.zeros(n_s))
     monitors = setup.monitors.recorder() if setup.monitors is not None else no_monitors()
     train = _recorder(setup, monitors.qty.shape[0])
     t0 = time.perf_counter()

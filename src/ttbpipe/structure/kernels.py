@@ -426,33 +426,41 @@ def structure_accelerations(packed, disp, vel, nodal_force, acc_out):
     ``nodal_force`` holds the external loads only and is not modified. Diagonal-mass DOFs use
     ``inv_mass`` (0 for fixed DOFs); each girder span block uses its dense inverse mass.
     """
-    _accelerations(packed, disp, vel, nodal_force, acc_out, packed.inv_mass, _EVERY_ELEMENT, 1,
+    for i in range(packed.n_dof):
+        acc_out[i] = nodal_force[i]
+    structure_accelerations_in_place(packed, disp, vel, acc_out)
+
+
+@kernel(creates_arrays=False)
+def structure_accelerations_in_place(packed, disp, vel, acc):
+    """:func:`structure_accelerations` with the external loads in ``acc`` on entry, replaced by
+    the accelerations: the coupled loop adds its wheel loads to ``acc`` directly, which saves
+    clearing a separate load vector and copying it at every step."""
+    _accelerations(packed, disp, vel, acc, packed.inv_mass, _EVERY_ELEMENT, 1,
                    _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1, _EVERY_ELEMENT, 1)
 
 
 @kernel(creates_arrays=False)
-def windowed_structure_accelerations(packed, window, disp, vel, nodal_force, acc_out):
-    """:func:`structure_accelerations` with the track outside a window frozen
+def windowed_accelerations_in_place(packed, window, disp, vel, acc):
+    """:func:`structure_accelerations_in_place` with the track outside a window frozen
     (:mod:`ttbpipe.structure.window`): only the elements in the window's ranges are evaluated
     (those with a DOF that moves), and the frozen DOFs have a zero inverse mass
     (``window.inv_mass``), like fixed DOFs. ``window.n_ranges`` counts the rows of each
     element kind's ranges (beams, links, pads, ballast, link triples). A window without
     segments (:func:`ttbpipe.structure.window.no_window`) gives
-    :func:`structure_accelerations` bit for bit."""
+    :func:`structure_accelerations_in_place` bit for bit."""
     n = window.n_ranges
-    _accelerations(packed, disp, vel, nodal_force, acc_out, window.inv_mass,
+    _accelerations(packed, disp, vel, acc, window.inv_mass,
                    window.beam_ranges, n[0], window.link_ranges, n[1], window.pad_ranges, n[2],
                    window.ballast_ranges, n[3], window.triple_ranges, n[4])
 
 
 @kernel(creates_arrays=False)
-def _accelerations(packed, disp, vel, nodal_force, acc_out, inv_mass, beams, n_beams, links,
+def _accelerations(packed, disp, vel, acc_out, inv_mass, beams, n_beams, links,
                    n_links, pads, n_pads, ballast, n_ballast, triples, n_triples):
-    """The accelerations with the given diagonal inverse mass, evaluating the elements in the
-    given ranges of each kind (rows [start, end) of element indices, the first ``n_*`` rows)."""
-    n = packed.n_dof
-    for i in range(n):
-        acc_out[i] = nodal_force[i]
+    """The accelerations, in place of the external loads in ``acc_out``, with the given
+    diagonal inverse mass, evaluating the elements in the given ranges of each kind (rows
+    [start, end) of element indices, the first ``n_*`` rows)."""
     _beam_forces(packed, disp, vel, acc_out, beams, n_beams)
     _link_forces(packed, disp, vel, acc_out, links, n_links)
     _pad_forces(packed, disp, vel, acc_out, pads, n_pads)

@@ -34,7 +34,7 @@ from ..decimation import decimator, flush, push
 from ..jit import kernel
 from ..timestepping.limits import check_time_step, stable_time_step
 from ..timestepping.zhai import zhai_predict
-from .kernels import structure_accelerations
+from .kernels import structure_accelerations, structure_accelerations_in_place
 from .monitors import compile_monitors, default_monitors, record_monitors
 from .rail_mesh import add_rail_point_load, rail_mesh
 
@@ -215,8 +215,9 @@ def default_duration(model, loads: LoadSet) -> float:
 LoadArrays = namedtuple("LoadArrays", ["rail", "x0", "speed", "F0", "F1", "freq", "phase",
                                        "extra_dofs", "extra_table"])
 #: Structure state of a time loop: displacements, velocities, accelerations (this and the last
-#: step) and the external nodal loads of the step.
-StructureState = namedtuple("StructureState", ["disp", "vel", "acc", "acc_prev", "nodal_force"])
+#: step). A step clears ``acc``, adds its loads to it and the structure kernel turns them into
+#: accelerations in place (:func:`ttbpipe.structure.kernels.structure_accelerations_in_place`).
+StructureState = namedtuple("StructureState", ["disp", "vel", "acc", "acc_prev"])
 
 
 @kernel(creates_arrays=False)
@@ -230,26 +231,25 @@ def _moving_load_loop(packed, mesh, loads, state, rec, dec, dt, n_steps, blowup_
     """
     n_loads = loads.rail.shape[0]
     n_extra = loads.extra_dofs.shape[0]
-    disp, vel, acc, acc_prev, nodal_force = (state.disp, state.vel, state.acc, state.acc_prev,
-                                             state.nodal_force)
+    disp, vel, acc, acc_prev = state.disp, state.vel, state.acc, state.acc_prev
     for step in range(n_steps + 1):
         t = step * dt
         if step > 0:
             psi = 0.0 if step == 1 else 0.5
             zhai_predict(disp, vel, acc, acc_prev, dt, psi, psi)
-        for i in range(nodal_force.shape[0]):
-            nodal_force[i] = 0.0
+        for i in range(acc.shape[0]):
+            acc[i] = 0.0
         for i in range(n_loads):
             x = loads.x0[i] + loads.speed[i] * t
             s = np.sin(2.0 * np.pi * loads.freq[i] * t + loads.phase[i])
             add_rail_point_load(mesh, loads.rail[i], x,
                                 loads.F0[i, 0] + loads.F1[i, 0] * s,
                                 loads.F0[i, 1] + loads.F1[i, 1] * s,
-                                loads.F0[i, 2] + loads.F1[i, 2] * s, nodal_force)
+                                loads.F0[i, 2] + loads.F1[i, 2] * s, acc)
         if n_extra > 0:
             for j in range(n_extra):
-                nodal_force[loads.extra_dofs[j]] += loads.extra_table[step, j]
-        structure_accelerations(packed, disp, vel, nodal_force, acc)
+                acc[loads.extra_dofs[j]] += loads.extra_table[step, j]
+        structure_accelerations_in_place(packed, disp, vel, acc)
         largest = record_monitors(rec, disp, vel, acc)
         push(dec, rec.current)
         if not largest < blowup_m:
@@ -281,7 +281,7 @@ def simulate(model, loads: LoadSet, dt: float, duration: float, monitor_specs=No
     rec = mons.recorder()
     dec = decimator(mons.n, n_out, output_every)
     n = model.n_dof
-    state = StructureState(*(np.zeros(n) for _ in range(5)))
+    state = StructureState(*(np.zeros(n) for _ in range(4)))
     if loads.target == "girder":
         extra_dofs, extra = girder_force_table(model, loads, dt, n_steps)
         empty = np.zeros(0)

@@ -40,7 +40,7 @@ DEFAULT_TRACK_WINDOW_M = None
 #: inverse mass and the working copy with the frozen DOFs at 0, each element's lowest segment
 #: (-1: always evaluated), and the evaluated elements as ranges (``*_ranges`` rows [start,
 #: end), ``n_ranges`` rows of beams, links, pads, ballast, link triples), which the kernels
-#: loop over (:func:`ttbpipe.structure.kernels.windowed_structure_accelerations`).
+#: loop over (:func:`ttbpipe.structure.kernels.windowed_accelerations_in_place`).
 TrackWindow = namedtuple("TrackWindow", [
     "n_segments", "segment_m", "margin_m", "segment_always", "segment_on", "active",
     "dof_segment", "base_inv_mass", "inv_mass",
