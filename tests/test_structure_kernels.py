@@ -208,3 +208,86 @@ def test_beam_chain_matches_element_by_element(model, ranges):
         _element_by_element_beam_forces(pk, u, ref, elements)
         assert np.array_equal(force, ref)
         assert not np.array_equal(force, f0)
+
+
+def _pad_by_pad_forces(packed, disp, vel, force, pads):
+    """Slow reference of the rail pads: each pad reads its rail node and seat from the arrays
+    and adds its forces to ``force`` in turn, in the given order (the kernel's form before it
+    held a seat over the run of pads on it)."""
+    from ttbpipe.structure.shape_functions import hermite
+
+    d_f, t_half = packed.pad_foot_depth, packed.pad_seat_half_thickness
+    n_slab = packed.pad_group[0]
+    n_slab_ballast = n_slab + packed.pad_group[1]
+    for p in pads:
+        rd, da, db = packed.pad_rail[p], packed.pad_seat_a[p], packed.pad_seat_b[p]
+        xi, L, e = packed.pad_geom[3 * p:3 * p + 3]
+        k, c = packed.pad_k[3 * p:3 * p + 3], packed.pad_c[3 * p:3 * p + 3]
+        dz, dy, dr = disp[rd], disp[rd + 2] + d_f * disp[rd + 4], disp[rd + 4]
+        vz, vy, vr = vel[rd], vel[rd + 2] + d_f * vel[rd + 4], vel[rd + 4]
+        if p < n_slab:
+            n1, n2, n3, n4 = hermite(xi, L)
+            wa = 1.0 - xi
+            rs, vrs = wa * disp[da + 4] + xi * disp[db + 4], wa * vel[da + 4] + xi * vel[db + 4]
+            dz -= n1 * disp[da] + n2 * disp[da + 1] + n3 * disp[db] + n4 * disp[db + 1] + e * rs
+            dy += t_half * rs - (n1 * disp[da + 2] + n2 * disp[da + 3] + n3 * disp[db + 2]
+                                 + n4 * disp[db + 3])
+            dr -= rs
+            vz -= n1 * vel[da] + n2 * vel[da + 1] + n3 * vel[db] + n4 * vel[db + 1] + e * vrs
+            vy += t_half * vrs - (n1 * vel[da + 2] + n2 * vel[da + 3] + n3 * vel[db + 2]
+                                  + n4 * vel[db + 3])
+            vr -= vrs
+        elif p < n_slab_ballast:
+            dz -= disp[da] + e * disp[da + 2]
+            dy -= disp[da + 1]
+            dr -= disp[da + 2]
+            vz -= vel[da] + e * vel[da + 2]
+            vy -= vel[da + 1]
+            vr -= vel[da + 2]
+        pz, py, pr = k[0] * dz + c[0] * vz, k[1] * dy + c[1] * vy, k[2] * dr + c[2] * vr
+        force[rd] -= pz
+        force[rd + 2] -= py
+        force[rd + 4] -= d_f * py + pr
+        if p < n_slab:
+            for dof, coef, load in ((da, n1, pz), (da + 1, n2, pz), (db, n3, pz), (db + 1, n4, pz),
+                                    (da + 2, n1, py), (da + 3, n2, py), (db + 2, n3, py),
+                                    (db + 3, n4, py)):
+                force[dof] += coef * load
+            q = e * pz - t_half * py + pr
+            force[da + 4] += wa * q
+            force[db + 4] += xi * q
+        elif p < n_slab_ballast:
+            force[da] += pz
+            force[da + 1] += py
+            force[da + 2] += e * pz + pr
+
+
+@pytest.mark.parametrize("approach,slab", [("ballasted", "continuous"), ("rigid", "continuous"),
+                                           ("slab", "discrete")])
+@pytest.mark.parametrize("ranges", [[[0, -1]], [[1, 6], [6, 7], [30, 75], [90, -1]]])
+def test_pad_runs_match_pad_by_pad(approach, slab, ranges):
+    """The pad kernel holds a seat (slab element, sleeper) over the run of pads on it and
+    shares the slab point between the two rails' pads (``_pad_forces``); every force must get
+    the same terms in the same order as pad by pad, so the two agree bit for bit: over every
+    pad (slab, sleeper and rigid-ground groups) and over ranges that cut the runs (a moving
+    window's)."""
+    from ttbpipe.structure.kernels import _pad_forces
+
+    m = build_structure({**SMALL, "layout": {**SMALL["layout"], "approach_track": approach},
+                         "slab": {"type": slab}})
+    packed = m.packed
+    n_pad = packed.pad_rail.size
+    group = {"ballasted": 1, "rigid": 2, "slab": 0}[approach]     # the approach's pads
+    assert packed.pad_group[0] > 0 and packed.pad_group[group] > 0
+    seat = np.stack([packed.pad_seat_a, packed.pad_seat_b], axis=1)
+    assert (seat[1:] == seat[:-1]).all(axis=1).mean() > 0.5     # the runs worth holding
+    rng = np.random.default_rng(12)
+    u, v, f0 = (rng.normal(size=packed.n_dof) for _ in range(3))
+    rows = np.array(ranges, dtype=np.int64)
+    pads = [p for r0, r1 in ranges for p in range(r0, n_pad if r1 < 0 else r1)]
+    force = f0.copy()
+    _pad_forces(packed, u, v, force, rows, rows.shape[0])
+    ref = f0.copy()
+    _pad_by_pad_forces(packed, u, v, ref, pads)
+    assert np.array_equal(force, ref)
+    assert not np.array_equal(force, f0)

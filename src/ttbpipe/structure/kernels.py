@@ -275,6 +275,183 @@ def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
                 force[dofs[j]] -= coef[3 * j] * p0 + coef[3 * j + 1] * p1 + coef[3 * j + 2] * p2
 
 
+@kernel(inline="always")
+def _pad_rail_motion(rd, disp, vel, d_f):
+    """The rail side of a pad at rail node DOF ``rd``: (d_z, d_y, d_roll) and their rates, d_y
+    at the rail foot (``d_f`` below the shear centre)."""
+    return (disp[rd], disp[rd + 2] + d_f * disp[rd + 4], disp[rd + 4],
+            vel[rd], vel[rd + 2] + d_f * vel[rd + 4], vel[rd + 4])
+
+
+@kernel(inline="always")
+def _pad_rail_forces(force, rd, d_f, pz, py, pr):
+    """Subtract a pad's forces (p_z, p_y at the foot, p_roll) from its rail node's."""
+    force[rd] -= pz
+    force[rd + 2] -= py
+    force[rd + 4] -= d_f * py + pr
+
+
+@kernel(creates_arrays=False)
+def _slab_pads(packed, disp, vel, force, p0, p1):
+    """Pads [p0, p1) on the slab (:func:`_pad_forces`), a slab element's two nodes (seats a, b)
+    held in registers over the run of pads on it."""
+    d_f = packed.pad_foot_depth
+    t_half = packed.pad_seat_half_thickness
+    rail = packed.pad_rail
+    seat_a = packed.pad_seat_a
+    seat_b = packed.pad_seat_b
+    geom = packed.pad_geom
+    kk = packed.pad_k
+    cc = packed.pad_c
+    da = -1
+    db = -1
+    ua0 = ua1 = ua2 = ua3 = ua4 = ub0 = ub1 = ub2 = ub3 = ub4 = 0.0
+    va0 = va1 = va2 = va3 = va4 = vb0 = vb1 = vb2 = vb3 = vb4 = 0.0
+    fa0 = fa1 = fa2 = fa3 = fa4 = fb0 = fb1 = fb2 = fb3 = fb4 = 0.0
+    xi = wa = rs = vrs = sz = sy = svz = svy = n1 = n2 = n3 = n4 = 0.0
+    new_run = True
+    for p in range(p0, p1):
+        a = seat_a[p]
+        b = seat_b[p]
+        if a != da or b != db:
+            if da >= 0:
+                force[da] = fa0
+                force[da + 1] = fa1
+                force[da + 2] = fa2
+                force[da + 3] = fa3
+                force[da + 4] = fa4
+                force[db] = fb0
+                force[db + 1] = fb1
+                force[db + 2] = fb2
+                force[db + 3] = fb3
+                force[db + 4] = fb4
+            da = a
+            db = b
+            ua0, ua1, ua2, ua3, ua4 = (disp[da], disp[da + 1], disp[da + 2], disp[da + 3],
+                                       disp[da + 4])
+            ub0, ub1, ub2, ub3, ub4 = (disp[db], disp[db + 1], disp[db + 2], disp[db + 3],
+                                       disp[db + 4])
+            va0, va1, va2, va3, va4 = vel[da], vel[da + 1], vel[da + 2], vel[da + 3], vel[da + 4]
+            vb0, vb1, vb2, vb3, vb4 = vel[db], vel[db + 1], vel[db + 2], vel[db + 3], vel[db + 4]
+            fa0, fa1, fa2, fa3, fa4 = (force[da], force[da + 1], force[da + 2], force[da + 3],
+                                       force[da + 4])
+            fb0, fb1, fb2, fb3, fb4 = (force[db], force[db + 1], force[db + 2], force[db + 3],
+                                       force[db + 4])
+            new_run = True
+        p3 = _THREE * p
+        rd = rail[p]
+        e = geom[p3 + _TWO]
+        dz, dy, dr, vz, vy, vr = _pad_rail_motion(rd, disp, vel, d_f)
+        x = geom[p3]
+        if x != xi or new_run:
+            # the slab point's motion (one element: one length), shared by the pads of both
+            # rails at one place
+            xi = x
+            new_run = False
+            n1, n2, n3, n4 = hermite(xi, geom[p3 + _ONE])
+            wa = 1.0 - xi
+            rs = wa * ua4 + xi * ub4
+            vrs = wa * va4 + xi * vb4
+            sz = n1 * ua0 + n2 * ua1 + n3 * ub0 + n4 * ub1
+            sy = n1 * ua2 + n2 * ua3 + n3 * ub2 + n4 * ub3
+            svz = n1 * va0 + n2 * va1 + n3 * vb0 + n4 * vb1
+            svy = n1 * va2 + n2 * va3 + n3 * vb2 + n4 * vb3
+        dz -= sz + e * rs
+        dy += t_half * rs - sy
+        dr -= rs
+        vz -= svz + e * vrs
+        vy += t_half * vrs - svy
+        vr -= vrs
+        pz = kk[p3] * dz + cc[p3] * vz
+        py = kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy
+        pr = kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr
+        _pad_rail_forces(force, rd, d_f, pz, py, pr)
+        fa0 += n1 * pz
+        fa1 += n2 * pz
+        fb0 += n3 * pz
+        fb1 += n4 * pz
+        fa2 += n1 * py
+        fa3 += n2 * py
+        fb2 += n3 * py
+        fb3 += n4 * py
+        q = e * pz - t_half * py + pr
+        fa4 += wa * q
+        fb4 += xi * q
+    if da >= 0:
+        force[da] = fa0
+        force[da + 1] = fa1
+        force[da + 2] = fa2
+        force[da + 3] = fa3
+        force[da + 4] = fa4
+        force[db] = fb0
+        force[db + 1] = fb1
+        force[db + 2] = fb2
+        force[db + 3] = fb3
+        force[db + 4] = fb4
+
+
+@kernel(creates_arrays=False)
+def _sleeper_pads(packed, disp, vel, force, p0, p1):
+    """Pads [p0, p1) on sleepers (:func:`_pad_forces`), a sleeper held over its pads."""
+    d_f = packed.pad_foot_depth
+    rail = packed.pad_rail
+    seat_a = packed.pad_seat_a
+    geom = packed.pad_geom
+    kk = packed.pad_k
+    cc = packed.pad_c
+    sd = -1
+    u0 = u1 = u2 = w0 = w1 = w2 = f0 = f1 = f2 = 0.0
+    for p in range(p0, p1):
+        s = seat_a[p]
+        if s != sd:
+            if sd >= 0:
+                force[sd] = f0
+                force[sd + 1] = f1
+                force[sd + 2] = f2
+            sd = s
+            u0, u1, u2 = disp[sd], disp[sd + 1], disp[sd + 2]
+            w0, w1, w2 = vel[sd], vel[sd + 1], vel[sd + 2]
+            f0, f1, f2 = force[sd], force[sd + 1], force[sd + 2]
+        p3 = _THREE * p
+        rd = rail[p]
+        e = geom[p3 + _TWO]
+        dz, dy, dr, vz, vy, vr = _pad_rail_motion(rd, disp, vel, d_f)
+        dz -= u0 + e * u2
+        dy -= u1
+        dr -= u2
+        vz -= w0 + e * w2
+        vy -= w1
+        vr -= w2
+        pz = kk[p3] * dz + cc[p3] * vz
+        py = kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy
+        pr = kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr
+        _pad_rail_forces(force, rd, d_f, pz, py, pr)
+        f0 += pz
+        f1 += py
+        f2 += e * pz + pr
+    if sd >= 0:
+        force[sd] = f0
+        force[sd + 1] = f1
+        force[sd + 2] = f2
+
+
+@kernel(creates_arrays=False)
+def _rigid_pads(packed, disp, vel, force, p0, p1):
+    """Pads [p0, p1) on rigid ground (:func:`_pad_forces`)."""
+    d_f = packed.pad_foot_depth
+    rail = packed.pad_rail
+    kk = packed.pad_k
+    cc = packed.pad_c
+    for p in range(p0, p1):
+        p3 = _THREE * p
+        rd = rail[p]
+        dz, dy, dr, vz, vy, vr = _pad_rail_motion(rd, disp, vel, d_f)
+        pz = kk[p3] * dz + cc[p3] * vz
+        py = kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy
+        pr = kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr
+        _pad_rail_forces(force, rd, d_f, pz, py, pr)
+
+
 @kernel(creates_arrays=False)
 def _pad_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every rail pad (fastener): vertical, lateral and roll spring-dampers
@@ -297,79 +474,22 @@ def _pad_forces(packed, disp, vel, force, ranges, n_ranges):
     Force p = k d + c d' per direction; the generalised forces are the transpose (virtual work).
     Same physics as the link-triple form (``assemble_matrices`` builds K, C from that form; the
     kernel test compares them).
+
+    The pads of one seat are stored one after the other (a slab element carries the pads of
+    both rails over its length, a sleeper the pair of its rail seats): each group's kernel
+    reads a seat's displacements and velocities once per run of pads on it, keeps its forces
+    in registers and writes them when the run ends, and the two pads at one place (left and
+    right rail, the same slab point) share the slab point's motion. Every force receives the
+    same terms in the same order as pad by pad, so the results are the same numbers.
     """
-    d_f = packed.pad_foot_depth
-    t_half = packed.pad_seat_half_thickness
     n_slab = np.uint64(packed.pad_group[0])
     n_slab_ballast = n_slab + np.uint64(packed.pad_group[1])
     n_pad = packed.pad_rail.shape[0]
-    rail = packed.pad_rail
-    seat_a = packed.pad_seat_a
-    seat_b = packed.pad_seat_b
-    geom = packed.pad_geom
-    kk = packed.pad_k
-    cc = packed.pad_c
     for k in range(n_ranges):
         p0, p1 = _element_span(ranges, k, n_pad)
-        for p in range(p0, p1):
-            p3 = _THREE * p
-            rd = rail[p]
-            e = geom[p3 + _TWO]
-            dz = disp[rd]
-            dy = disp[rd + 2] + d_f * disp[rd + 4]
-            dr = disp[rd + 4]
-            vz = vel[rd]
-            vy = vel[rd + 2] + d_f * vel[rd + 4]
-            vr = vel[rd + 4]
-            da = seat_a[p]
-            db = seat_b[p]
-            sd = da
-            xi = 0.0
-            wa = 1.0
-            n1 = n2 = n3 = n4 = 0.0
-            if p < n_slab:
-                xi = geom[p3]
-                n1, n2, n3, n4 = hermite(xi, geom[p3 + _ONE])
-                wa = 1.0 - xi
-                rs = wa * disp[da + 4] + xi * disp[db + 4]
-                vrs = wa * vel[da + 4] + xi * vel[db + 4]
-                dz -= n1 * disp[da] + n2 * disp[da + 1] + n3 * disp[db] + n4 * disp[db + 1] + e * rs
-                dy += t_half * rs - (n1 * disp[da + 2] + n2 * disp[da + 3] + n3 * disp[db + 2]
-                                     + n4 * disp[db + 3])
-                dr -= rs
-                vz -= n1 * vel[da] + n2 * vel[da + 1] + n3 * vel[db] + n4 * vel[db + 1] + e * vrs
-                vy += t_half * vrs - (n1 * vel[da + 2] + n2 * vel[da + 3] + n3 * vel[db + 2]
-                                      + n4 * vel[db + 3])
-                vr -= vrs
-            elif p < n_slab_ballast:
-                dz -= disp[sd] + e * disp[sd + 2]
-                dy -= disp[sd + 1]
-                dr -= disp[sd + 2]
-                vz -= vel[sd] + e * vel[sd + 2]
-                vy -= vel[sd + 1]
-                vr -= vel[sd + 2]
-            pz = kk[p3] * dz + cc[p3] * vz
-            py = kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy
-            pr = kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr
-            force[rd] -= pz
-            force[rd + 2] -= py
-            force[rd + 4] -= d_f * py + pr
-            if p < n_slab:
-                force[da] += n1 * pz
-                force[da + 1] += n2 * pz
-                force[db] += n3 * pz
-                force[db + 1] += n4 * pz
-                force[da + 2] += n1 * py
-                force[da + 3] += n2 * py
-                force[db + 2] += n3 * py
-                force[db + 3] += n4 * py
-                q = e * pz - t_half * py + pr
-                force[da + 4] += wa * q
-                force[db + 4] += xi * q
-            elif p < n_slab_ballast:
-                force[sd] += pz
-                force[sd + 1] += py
-                force[sd + 2] += e * pz + pr
+        _slab_pads(packed, disp, vel, force, p0, min(p1, n_slab))
+        _sleeper_pads(packed, disp, vel, force, max(p0, n_slab), min(p1, n_slab_ballast))
+        _rigid_pads(packed, disp, vel, force, max(p0, n_slab_ballast), p1)
 
 
 @kernel(creates_arrays=False)
