@@ -177,10 +177,11 @@ N_COLS = 11
 #: track x, for positive yaw of the left wheel; odd in yaw).
 COL_G, COL_A, COL_E, COL_YAW2, COL_LEAD = (np.int64(k) for k in range(11, 16))
 N_ZCOLS = 16
-#: Per-wheel results of :func:`_wheel_contact_points`: the seven of :func:`_wheel_contact`, then
-#: the generalised moments of the wheel's contact forces about the wheelset centre (roll, spin,
+#: Per-wheel results of both contact kernels (:func:`_wheel_contact`,
+#: :func:`_wheel_contact_points`): F_x, F_y, F_z, M_spin, N, y_rel, penetration, then the
+#: generalised moments of the wheel's contact forces about the wheelset centre (roll, spin,
 #: yaw; N m) and the moment of its vertical forces about the rail's shear-centre line (N m,
-#: about x).
+#: about x; 0 for the one-point contact, which acts on that line).
 N_POINT_OUT = 11
 #: Columns of the two-point kernel's per-point scratch ``pts`` (:func:`_wheel_contact_points`).
 N_PTS_COLS = 13
@@ -746,9 +747,12 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
 
     ``wheelset`` = (y, z, roll, yaw, dy/dt, dz/dt, droll/dt, dpitch/dt (spin), dyaw/dt) of the
     wheelset; ``rail`` = (z, y, dz/dt, dy/dt) of the rail head at the contact (structure plus
-    irregularity). Writes ``out``: [F_x, F_y, F_z, M_spin_z, N, y_rel, penetration] where F is
-    the force of the rail on the wheel (contact + flange) and M_spin_z the spin moment about the
-    contact normal. Kinematics (small angles): penetration
+    irregularity). Writes ``out`` (:data:`N_POINT_OUT`, as :func:`_wheel_contact_points`):
+    [F_x, F_y, F_z, M_spin_z, N, y_rel, penetration] where F is the force of the rail on the
+    wheel (contact + flange) and M_spin_z the spin moment about the contact normal, then the
+    generalised moments about the wheelset centre of the force at (0, s a0, -r): roll
+    s a0 F_z + r F_y, spin -r F_x, yaw -s a0 F_x + M_spin_z cos d, and 0 (the point lies on the
+    rail's centre line: no moment about it). Kinematics (small angles): penetration
     dZ = z_rail - (z_w + s a0 roll_w) + dz(y_rel); creepages
     xi_x = -(r - r0)/r0 - s a0 yaw'/V - r pitch'/V,
     xi_y = [(y_w' + r roll_w' - V yaw_w - y_rail') cos d + s (z_w' + s a0 roll_w' - z_rail') sin d]/V,
@@ -807,6 +811,10 @@ def _wheel_contact(side: float, table: np.ndarray, scal: np.ndarray, speed: floa
     out[4] = normal
     out[5] = y_rel
     out[6] = penetration
+    out[7] = side * a0 * force_z + radius * force_y
+    out[8] = -radius * fx
+    out[9] = -side * a0 * fx + mz * cos_d
+    out[10] = 0.0
     return xi_y_state
 
 
@@ -1036,9 +1044,9 @@ def wheel_contact_points(side: float, geom: ContactGeometry, speed: float, ws: d
 def wheel_contact(side: float, geom: ContactGeometry, speed: float, ws: dict, rail: dict) -> np.ndarray:
     """Python wrapper of :func:`_wheel_contact` for tests: ``ws``/``rail`` give the kinematics."""
     row = np.zeros(N_COLS)
-    out = np.zeros(7)
+    out = np.zeros(N_POINT_OUT)
     wheelset = tuple(float(ws.get(k, 0.0)) for k in ("y", "z", "roll", "yaw", "vy", "vz", "vroll",
                                                      "vpitch", "vyaw"))
     rails = tuple(float(rail.get(k, 0.0)) for k in ("z", "y", "vz", "vy"))
     _wheel_contact(side, geom.table, geom.scalars(), speed, wheelset, rails, row, out)
-    return out
+    return out[:7]

@@ -60,13 +60,13 @@ def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratc
 
     A contact at (0, s a0, -r) from the wheelset centre with force (F_x, F_y, F_z) and spin moment
     M about the normal gives: y += F_y, z += F_z, roll += s a0 F_z + r F_y, pitch (spin)
-    += -r F_x, yaw += -s a0 F_x + M cos(delta) (r x F, small angles). The rolling radius r and
-    contact angle come from the geometry table at the wheel's relative lateral position; with
-    two-point contact each point acts at its own (0, s a_k, -r_k).
+    += -r F_x, yaw += -s a0 F_x + M cos(delta) (r x F, small angles; the contact kernels
+    return these moments). The rolling radius r and contact angle come from the geometry table
+    at the wheel's relative lateral position; with two-point contact each point acts at its own
+    (0, s a_k, -r_k).
     """
     table, scal, zones = geometry
     row, tmp, creep_state, pts = scratch
-    a0 = scal[6]
     n_ws = ws_dofs.shape[0]
     two_point = zones.shape[0] > 0
     with_roll = rail_kin.shape[2] > 4
@@ -88,33 +88,22 @@ def train_contact(q, v, ws_dofs, geometry, speed, rail_kin, force, wheel, scratc
                     (rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3],
                      roll, vroll),
                     pts, tmp, creep_state[w, k], creep_relax)
-                force[iy] += tmp[1]
-                force[iz] += tmp[2]
-                force[ir] += tmp[7]
-                force[ip] += tmp[8]
-                force[iw] += tmp[9]
-                for c in range(7):
-                    wheel[w, k, c] = tmp[c]
-                wheel[w, k, 7] = tmp[10]
-                continue
-            creep_state[w, k, 0] = _wheel_contact(
-                side, table, scal, speed,
-                (q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip],
-                 v[iw] + frame_yaw_rate[w]),
-                (rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3]),
-                row, tmp, creep_state[w, k, 0], creep_relax)
-            fx = tmp[0]
-            fy = tmp[1]
-            fz = tmp[2]
-            radius = row[1]
-            cos_d = np.cos(row[3])
-            force[iy] += fy
-            force[iz] += fz
-            force[ir] += side * a0 * fz + radius * fy
-            force[ip] += -radius * fx
-            force[iw] += -side * a0 * fx + tmp[3] * cos_d
+            else:
+                creep_state[w, k, 0] = _wheel_contact(
+                    side, table, scal, speed,
+                    (q[iy], q[iz], q[ir], q[iw], v[iy], v[iz], v[ir], v[ip],
+                     v[iw] + frame_yaw_rate[w]),
+                    (rail_kin[w, k, 0], rail_kin[w, k, 2], rail_kin[w, k, 1], rail_kin[w, k, 3]),
+                    row, tmp, creep_state[w, k, 0], creep_relax)
+            # both kernels give the forces and the generalised moments (N_POINT_OUT)
+            force[iy] += tmp[1]
+            force[iz] += tmp[2]
+            force[ir] += tmp[7]
+            force[ip] += tmp[8]
+            force[iw] += tmp[9]
             for c in range(7):
                 wheel[w, k, c] = tmp[c]
+            wheel[w, k, 7] = tmp[10]
 
 
 def contact_forces(q, v, ws_dofs, geom, speed, rail_kin, frame_yaw_rate=None):
