@@ -65,6 +65,22 @@ def _element_span(ranges, k, n):
 
 
 @kernel(inline="always")
+def _node_values(values, d):
+    """The five values of a beam node from DOF ``d`` on (z, dz/dx, y, dy/dx, roll)."""
+    return values[d], values[d + 1], values[d + 2], values[d + 3], values[d + 4]
+
+
+@kernel(inline="always")
+def _set_node_values(values, d, v0, v1, v2, v3, v4):
+    """Write the five values of a beam node from DOF ``d`` on."""
+    values[d] = v0
+    values[d + 1] = v1
+    values[d + 2] = v2
+    values[d + 3] = v3
+    values[d + 4] = v4
+
+
+@kernel(inline="always")
 def _hermite_end_forces(EI, L, w1, t1, w2, t2):
     """(f1, m1, m2) of a Hermite beam element in one plane: k_e [w1, t1, w2, t2] is
     (f1, m1, -f1, m2)."""
@@ -109,16 +125,11 @@ def _beam_forces(packed, disp, vel, force, ranges, n_ranges):
                 fa0, fa1, fa2, fa3, fa4 = g0, g1, g2, g3, g4
             else:
                 if prev_b >= 0:
-                    force[prev_b] = g0
-                    force[prev_b + 1] = g1
-                    force[prev_b + 2] = g2
-                    force[prev_b + 3] = g3
-                    force[prev_b + 4] = g4
-                w1, t1, y1, s1, r1 = disp[a], disp[a + 1], disp[a + 2], disp[a + 3], disp[a + 4]
-                fa0, fa1, fa2 = force[a], force[a + 1], force[a + 2]
-                fa3, fa4 = force[a + 3], force[a + 4]
-            u0, u1, u2, u3, u4 = disp[b], disp[b + 1], disp[b + 2], disp[b + 3], disp[b + 4]
-            g0, g1, g2, g3, g4 = force[b], force[b + 1], force[b + 2], force[b + 3], force[b + 4]
+                    _set_node_values(force, prev_b, g0, g1, g2, g3, g4)
+                w1, t1, y1, s1, r1 = _node_values(disp, a)
+                fa0, fa1, fa2, fa3, fa4 = _node_values(force, a)
+            u0, u1, u2, u3, u4 = _node_values(disp, b)
+            g0, g1, g2, g3, g4 = _node_values(force, b)
             f1, m1, m2 = _hermite_end_forces(packed.beam_EIv[e], L, w1, t1, u0, u1)
             fa0 -= f1
             fa1 -= m1
@@ -132,18 +143,10 @@ def _beam_forces(packed, disp, vel, force, ranges, n_ranges):
             kt = packed.beam_GK[e] / L * (r1 - u4)
             fa4 -= kt
             g4 += kt
-            force[a] = fa0
-            force[a + 1] = fa1
-            force[a + 2] = fa2
-            force[a + 3] = fa3
-            force[a + 4] = fa4
+            _set_node_values(force, a, fa0, fa1, fa2, fa3, fa4)
             prev_b = b
         if prev_b >= 0:
-            force[prev_b] = g0
-            force[prev_b + 1] = g1
-            force[prev_b + 2] = g2
-            force[prev_b + 3] = g3
-            force[prev_b + 4] = g4
+            _set_node_values(force, prev_b, g0, g1, g2, g3, g4)
 
 
 @kernel(creates_arrays=False)
@@ -284,6 +287,15 @@ def _pad_rail_motion(rd, disp, vel, d_f):
 
 
 @kernel(inline="always")
+def _pad_law(packed, p3, dz, dy, dr, vz, vy, vr):
+    """A pad's forces (p_z, p_y, p_roll) = k d + c d' per direction (pad ``p3 / 3``)."""
+    kk = packed.pad_k
+    cc = packed.pad_c
+    return (kk[p3] * dz + cc[p3] * vz, kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy,
+            kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr)
+
+
+@kernel(inline="always")
 def _pad_rail_forces(force, rd, d_f, pz, py, pr):
     """Subtract a pad's forces (p_z, p_y at the foot, p_roll) from its rail node's."""
     force[rd] -= pz
@@ -301,8 +313,6 @@ def _slab_pads(packed, disp, vel, force, p0, p1):
     seat_a = packed.pad_seat_a
     seat_b = packed.pad_seat_b
     geom = packed.pad_geom
-    kk = packed.pad_k
-    cc = packed.pad_c
     da = -1
     db = -1
     ua0 = ua1 = ua2 = ua3 = ua4 = ub0 = ub1 = ub2 = ub3 = ub4 = 0.0
@@ -315,28 +325,16 @@ def _slab_pads(packed, disp, vel, force, p0, p1):
         b = seat_b[p]
         if a != da or b != db:
             if da >= 0:
-                force[da] = fa0
-                force[da + 1] = fa1
-                force[da + 2] = fa2
-                force[da + 3] = fa3
-                force[da + 4] = fa4
-                force[db] = fb0
-                force[db + 1] = fb1
-                force[db + 2] = fb2
-                force[db + 3] = fb3
-                force[db + 4] = fb4
+                _set_node_values(force, da, fa0, fa1, fa2, fa3, fa4)
+                _set_node_values(force, db, fb0, fb1, fb2, fb3, fb4)
             da = a
             db = b
-            ua0, ua1, ua2, ua3, ua4 = (disp[da], disp[da + 1], disp[da + 2], disp[da + 3],
-                                       disp[da + 4])
-            ub0, ub1, ub2, ub3, ub4 = (disp[db], disp[db + 1], disp[db + 2], disp[db + 3],
-                                       disp[db + 4])
-            va0, va1, va2, va3, va4 = vel[da], vel[da + 1], vel[da + 2], vel[da + 3], vel[da + 4]
-            vb0, vb1, vb2, vb3, vb4 = vel[db], vel[db + 1], vel[db + 2], vel[db + 3], vel[db + 4]
-            fa0, fa1, fa2, fa3, fa4 = (force[da], force[da + 1], force[da + 2], force[da + 3],
-                                       force[da + 4])
-            fb0, fb1, fb2, fb3, fb4 = (force[db], force[db + 1], force[db + 2], force[db + 3],
-                                       force[db + 4])
+            ua0, ua1, ua2, ua3, ua4 = _node_values(disp, da)
+            ub0, ub1, ub2, ub3, ub4 = _node_values(disp, db)
+            va0, va1, va2, va3, va4 = _node_values(vel, da)
+            vb0, vb1, vb2, vb3, vb4 = _node_values(vel, db)
+            fa0, fa1, fa2, fa3, fa4 = _node_values(force, da)
+            fb0, fb1, fb2, fb3, fb4 = _node_values(force, db)
             new_run = True
         p3 = _THREE * p
         rd = rail[p]
@@ -362,9 +360,7 @@ def _slab_pads(packed, disp, vel, force, p0, p1):
         vz -= svz + e * vrs
         vy += t_half * vrs - svy
         vr -= vrs
-        pz = kk[p3] * dz + cc[p3] * vz
-        py = kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy
-        pr = kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr
+        pz, py, pr = _pad_law(packed, p3, dz, dy, dr, vz, vy, vr)
         _pad_rail_forces(force, rd, d_f, pz, py, pr)
         fa0 += n1 * pz
         fa1 += n2 * pz
@@ -378,16 +374,8 @@ def _slab_pads(packed, disp, vel, force, p0, p1):
         fa4 += wa * q
         fb4 += xi * q
     if da >= 0:
-        force[da] = fa0
-        force[da + 1] = fa1
-        force[da + 2] = fa2
-        force[da + 3] = fa3
-        force[da + 4] = fa4
-        force[db] = fb0
-        force[db + 1] = fb1
-        force[db + 2] = fb2
-        force[db + 3] = fb3
-        force[db + 4] = fb4
+        _set_node_values(force, da, fa0, fa1, fa2, fa3, fa4)
+        _set_node_values(force, db, fb0, fb1, fb2, fb3, fb4)
 
 
 @kernel(creates_arrays=False)
@@ -397,8 +385,6 @@ def _sleeper_pads(packed, disp, vel, force, p0, p1):
     rail = packed.pad_rail
     seat_a = packed.pad_seat_a
     geom = packed.pad_geom
-    kk = packed.pad_k
-    cc = packed.pad_c
     sd = -1
     u0 = u1 = u2 = w0 = w1 = w2 = f0 = f1 = f2 = 0.0
     for p in range(p0, p1):
@@ -422,9 +408,7 @@ def _sleeper_pads(packed, disp, vel, force, p0, p1):
         vz -= w0 + e * w2
         vy -= w1
         vr -= w2
-        pz = kk[p3] * dz + cc[p3] * vz
-        py = kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy
-        pr = kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr
+        pz, py, pr = _pad_law(packed, p3, dz, dy, dr, vz, vy, vr)
         _pad_rail_forces(force, rd, d_f, pz, py, pr)
         f0 += pz
         f1 += py
@@ -440,15 +424,11 @@ def _rigid_pads(packed, disp, vel, force, p0, p1):
     """Pads [p0, p1) on rigid ground (:func:`_pad_forces`)."""
     d_f = packed.pad_foot_depth
     rail = packed.pad_rail
-    kk = packed.pad_k
-    cc = packed.pad_c
     for p in range(p0, p1):
         p3 = _THREE * p
         rd = rail[p]
         dz, dy, dr, vz, vy, vr = _pad_rail_motion(rd, disp, vel, d_f)
-        pz = kk[p3] * dz + cc[p3] * vz
-        py = kk[p3 + _ONE] * dy + cc[p3 + _ONE] * vy
-        pr = kk[p3 + _TWO] * dr + cc[p3 + _TWO] * vr
+        pz, py, pr = _pad_law(packed, p3, dz, dy, dr, vz, vy, vr)
         _pad_rail_forces(force, rd, d_f, pz, py, pr)
 
 
