@@ -24,11 +24,14 @@ RAIL_KIN_COLS = 6
 
 @kernel(creates_arrays=False)
 def csr_matvec_sub(indptr, indices, data, x, out):
-    """out -= A x for a CSR matrix A."""
+    """out -= A x for a CSR matrix A.
+
+    The indices are taken unsigned: numba then drops its negative-index wrap-around test on
+    every access made with them (as in the structure's element loops)."""
     for i in range(indptr.shape[0] - 1):
         s = 0.0
-        for j in range(indptr[i], indptr[i + 1]):
-            s += data[j] * x[indices[j]]
+        for j in range(np.uint64(indptr[i]), np.uint64(indptr[i + 1])):
+            s += data[j] * x[np.uint64(indices[j])]
         out[i] -= s
 
 
