@@ -147,8 +147,9 @@ PlacedTrain = namedtuple("PlacedTrain", ["vehicle", "track", "speed", "creep_rel
 @kernel(creates_arrays=False)
 def _train_loads(t, state, placed, work, mesh, ws_s, rail_kin, creep_scale):
     """One train at time t: its rail kinematics, accelerations (``state.a``) and wheel table
-    (``work.wheel``); adds its wheel loads to ``state.acc`` (the structure's loads). ``creep_scale``: 0.0 at the
-    evaluation at t = 0 (explicit creep law, as :func:`_coupled_loop`), 1.0 after it.
+    (``work.wheel``); adds its wheel loads to ``state.acc`` (the structure's loads, turned into
+    accelerations in place by the structure kernel). ``creep_scale``: 0.0 at the evaluation at
+    t = 0 (explicit creep law, as :func:`_coupled_loop`), 1.0 after it.
 
     A float rather than a bool: numba compiles a separate copy of every caller for each
     literal True and False (measured: the loop's first compilation took 11 s longer)."""

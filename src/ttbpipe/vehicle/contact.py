@@ -1049,4 +1049,4 @@ def wheel_contact(side: float, geom: ContactGeometry, speed: float, ws: dict, ra
                                                      "vpitch", "vyaw"))
     rails = tuple(float(rail.get(k, 0.0)) for k in ("z", "y", "vz", "vy"))
     _wheel_contact(side, geom.table, geom.scalars(), speed, wheelset, rails, row, out)
-    return out[:7]
+    return out[:7]      # forces, normal load, y_rel, penetration: N_POINT_OUT less the moments
