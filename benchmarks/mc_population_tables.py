@@ -1,6 +1,6 @@
 """A Monte Carlo batch's population: the campaigns' PSD tables against the pooled table.
 
-    python benchmarks/mc_population_tables.py ROOT [--rounds 3]
+    python benchmarks/mc_population_tables.py ROOT [--rounds 3] [--baseline-src DIR]
 
 ROOT: a clone in which `snakemake --cores 2 --configfile config/case3.yaml` has written the PSD
 tables (results/case3/psd/*.parquet: paper case 3's 36 campaigns of 85 sections). Pools them
@@ -9,6 +9,9 @@ study_mc_population does), then, in fresh processes, the two ways alternating, t
 batch does before its first run: the imports of `ttbpipe.study.samples` and the first sample's
 profile (`mc_profile`), from the 36 tables (``psd_paths``) or from the pooled table
 (``pooled_path``). Prints each process's wall time and checks that both give the same profile.
+The child synthesises the profiles of eight sections (``SECTIONS``), as a batch's first
+samples do. ``--baseline-src DIR``: also the pooled table read by the code of another revision
+(its ``src`` folder, e.g. from ``git archive``), in the same rounds: side by side, old and new.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from __future__ import annotations
 import argparse
 import glob
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -30,15 +34,24 @@ import sys, time, hashlib, json
 start = time.perf_counter()
 from ttbpipe.study.samples import mc_profile
 population = json.loads(sys.argv[1])
-profile = mc_profile(population, 12345, 17, sample_index=3)
-print(time.perf_counter() - start, hashlib.sha256(profile.to_numpy().tobytes()).hexdigest()[:16])
+digest = hashlib.sha256()
+for section in json.loads(sys.argv[2]):
+    profile = mc_profile(population, 12345, section, sample_index=section + 3)
+    digest.update(profile.to_numpy().tobytes())
+print(time.perf_counter() - start, digest.hexdigest()[:16])
 """
+
+#: Population sections whose profiles the child synthesises (the first, the last, and some
+#: neighbours and strangers, as a batch draws them).
+SECTIONS = [17, 0, 3059, 1500, 16, 15, 31, 32]
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("root", type=Path)
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--baseline-src", type=Path, default=None,
+                        help="the src folder of another revision: its pooled-table reading too")
     args = parser.parse_args()
 
     from ttbpipe.study.plan import mc_profile_settings
@@ -56,19 +69,27 @@ def main() -> None:
         population = write_pooled_population(paths, settings["wavelength_band_m"], pooled)
         print(f"pooled {len(paths)} tables, {population.n_sections} sections, into "
               f"{pooled.stat().st_size / 1e6:.1f} MB in {time.perf_counter() - start:.2f} s")
-        variants = {"36 campaign tables": {**settings, "psd_paths": paths},
-                    "pooled table": {**settings, "pooled_path": str(pooled)}}
+        sections = [s for s in SECTIONS if s < population.n_sections]
+        variants = {"36 campaign tables": ({**settings, "psd_paths": paths}, None),
+                    "pooled table": ({**settings, "pooled_path": str(pooled)}, None)}
+        if args.baseline_src is not None:
+            variants["pooled table, baseline"] = ({**settings, "pooled_path": str(pooled)},
+                                                  str(args.baseline_src.resolve()))
         seen: dict[str, set[str]] = {name: set() for name in variants}
-        print("imports and the first profile, wall s per fresh process:")
+        print(f"imports and the profiles of {len(sections)} sections, wall s per fresh process:")
         for round_ in range(args.rounds):
-            for name, population_settings in variants.items():
+            for name, (population_settings, src) in variants.items():
+                env = dict(os.environ)
+                if src is not None:
+                    env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
                 out = subprocess.run([sys.executable, "-c", _CHILD,
-                                      json.dumps(population_settings)],
-                                     check=True, capture_output=True, text=True).stdout.split()
+                                      json.dumps(population_settings), json.dumps(sections)],
+                                     check=True, capture_output=True, text=True,
+                                     env=env).stdout.split()
                 seen[name].add(out[1])
-                print(f"  round {round_ + 1}  {name:20s} {float(out[0]):6.2f} s")
+                print(f"  round {round_ + 1}  {name:24s} {float(out[0]):6.2f} s")
     digests = set.union(*seen.values())
-    print("same profile from both:", "yes" if len(digests) == 1 else f"NO {seen}")
+    print("same profiles from all:", "yes" if len(digests) == 1 else f"NO {seen}")
 
 
 if __name__ == "__main__":

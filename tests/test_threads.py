@@ -55,3 +55,41 @@ def test_session_environment_is_set_before_numba_loads():
     import numba
 
     assert numba.config.NUMBA_NUM_THREADS == int(os.environ["NUMBA_NUM_THREADS"])
+
+
+def test_nested_entries_keep_the_outer_limits_and_scan_once(monkeypatch):
+    """A pinned sample calling a pinned run scans the loaded libraries once (threadpoolctl's
+    scan costs about 2 ms an entry), holds one thread in every BLAS/OpenMP pool at every depth,
+    and the outer exit restores what was there before."""
+    import threadpoolctl
+
+    from ttbpipe.threads import SAMPLE_THREADS, single_threaded
+
+    import scipy.linalg  # noqa: F401  (a BLAS library loaded, whatever ran before)
+
+    def threads():
+        return {lib["filepath"]: lib["num_threads"] for lib in threadpoolctl.threadpool_info()}
+
+    entries = []
+    real = threadpoolctl.threadpool_limits
+
+    def counted(*args, **kwargs):
+        entries.append(kwargs)
+        return real(*args, **kwargs)
+
+    with real(limits=2):   # so that the restore shows
+        before = threads()
+        monkeypatch.setattr(threadpoolctl, "threadpool_limits", counted)
+        with single_threaded():
+            assert set(threads().values()) == {SAMPLE_THREADS}
+            with single_threaded():
+                with single_threaded():
+                    assert set(threads().values()) == {SAMPLE_THREADS}
+            assert set(threads().values()) == {SAMPLE_THREADS}
+        after = threads()
+    assert 2 in before.values()
+    assert {lib: after[lib] for lib in before} == before
+    assert len(entries) == 1
+    with single_threaded():   # and again after the outer exit
+        pass
+    assert len(entries) == 2

@@ -141,6 +141,92 @@ def test_pooled_table_gives_back_the_campaigns_population(tmp_path, band):
         read_pooled_population(out, (2.0, 200.0))
 
 
+def _written_pooled(tmp_path, n_sections, **parquet_options):
+    """A pooled table of ``n_sections`` synthetic sections, as write_pooled_population writes
+    it (``parquet_options``: pyarrow.parquet.write_table's, to write it another way)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from ttbpipe.io import PROVENANCE_KEY, write_table
+    from ttbpipe.tipm.population import POOLED_SECTIONS_PER_ROW_GROUP
+
+    population = synthetic_population(n_sections, np.arange(1, 12) / 100.0, np.ones((11, 4)),
+                                      np.random.default_rng(n_sections))
+    path = tmp_path / f"pooled_{n_sections}_{len(parquet_options)}.parquet"
+    if parquet_options:
+        table = pa.Table.from_pandas(population.to_pooled_table(), preserve_index=False)
+        meta = {PROVENANCE_KEY: b'{"wavelength_band_m": null}'}
+        pq.write_table(table.replace_schema_metadata(meta), path, **parquet_options)
+    else:
+        write_table(population.to_pooled_table(), path, kind="pooled_psd_population",
+                    row_group_size=11 * POOLED_SECTIONS_PER_ROW_GROUP, wavelength_band_m=None)
+    return population, path
+
+
+@pytest.mark.parametrize("options", [{}, {"row_group_size": 5}, {"write_statistics": False}],
+                         ids=["as written", "sections across row groups", "no statistics"])
+def test_pooled_sections_are_the_populations_sections(tmp_path, options):
+    """PooledSections (a Monte Carlo batch reads its sections one by one) gives every section
+    bit for bit as the whole table's population has it: from the row groups that hold it
+    (sections of several groups, 5 rows a group against 11 frequencies a section), or from the
+    whole table when the file has no statistics to locate it."""
+    import pyarrow.parquet as pq
+
+    from ttbpipe.tipm.population import PooledSections, read_pooled_population
+
+    population, path = _written_pooled(tmp_path, 37, **options)
+    assert same(read_pooled_population(path, None), population)
+    reader = PooledSections(path, None)
+    assert reader.n_sections == 37
+    for s in (36, 0, 15, 16, 17, 31, 32, 5, 36):
+        assert same(reader.section(s), population.subset([s])), s
+    assert len(reader._groups) <= PooledSections.KEPT_GROUPS
+    if not options:   # the sections of one group of 16 are read from that group alone
+        assert pq.ParquetFile(path).metadata.num_row_groups == 3
+        fresh = PooledSections(path, None)
+        fresh.section(20)
+        assert list(fresh._groups) == [1]
+    with pytest.raises(ValueError, match="outside the population of 37 sections"):
+        reader.section(37)
+    with pytest.raises(ValueError, match="pooled over the wavelength band"):
+        PooledSections(path, (2.0, 200.0))
+
+
+def test_pooled_sections_refuse_bad_tables(tmp_path):
+    """A table not section-major from 0, a section without rows and a section on another
+    frequency grid are refused with the file, the section and the cause."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from ttbpipe.io import PROVENANCE_KEY
+    from ttbpipe.tipm.population import PooledSections
+
+    table = synthetic_population(6, np.arange(1, 12) / 100.0, np.ones((11, 4)),
+                                 np.random.default_rng(0)).to_pooled_table()
+
+    def written(df, name):
+        path = tmp_path / f"{name}.parquet"
+        arrow = pa.Table.from_pandas(df, preserve_index=False)
+        pq.write_table(arrow.replace_schema_metadata(
+            {PROVENANCE_KEY: b'{"wavelength_band_m": null}'}), path, row_group_size=22)
+        return path
+
+    reversed_groups = pd.concat([table.iloc[22:44], table.iloc[:22], table.iloc[44:]])
+    with pytest.raises(ValueError, match="row group 0 holds population_section 2-3 after -1"):
+        PooledSections(written(reversed_groups, "reversed"), None)
+    gap = table.assign(population_section=table["population_section"].where(
+        table["population_section"] != 3, 4))
+    with pytest.raises(ValueError, match="population_section 3: no rows"):
+        PooledSections(written(gap, "gap"), None).section(3)
+    other_grid = table.assign(spatial_frequency_per_m=np.where(
+        table["population_section"] == 4, table["spatial_frequency_per_m"] * 1.5,
+        table["spatial_frequency_per_m"]))
+    reader = PooledSections(written(other_grid, "grid"), None)
+    reader.section(1)
+    with pytest.raises(ValueError, match="population_section 4: sections do not share"):
+        reader.section(4)
+
+
 def test_bad_pooled_tables_are_refused():
     table = synthetic_population(3, np.arange(1, 11) / 100.0, np.ones((10, 4)),
                                  np.random.default_rng(0)).to_pooled_table()

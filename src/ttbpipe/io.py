@@ -99,15 +99,16 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
 def write_table(df: pd.DataFrame, path: str | os.PathLike[str], *,
                 config: Mapping[str, Any] | None = None, kind: str | None = None,
-                **extra: Any) -> Path:
-    """Write ``df`` to Parquet atomically, with the provenance document in its metadata."""
+                row_group_size: int | None = None, **extra: Any) -> Path:
+    """Write ``df`` to Parquet atomically, with the provenance document in its metadata
+    (``row_group_size``: rows per row group, pyarrow's default when None)."""
     table = pa.Table.from_pandas(df, preserve_index=False)
     meta = dict(table.schema.metadata or {})
     meta[PROVENANCE_KEY] = json.dumps(provenance(config, kind, **extra)).encode()
     table = table.replace_schema_metadata(meta)
     path = Path(path)
     with atomic_path(path) as tmp:
-        pq.write_table(table, tmp)
+        pq.write_table(table, tmp, row_group_size=row_group_size)
     return path
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
+import threading
 from typing import Any, Callable, Iterator, TypeVar
 
 #: Threads of the numerical work of one sample (BLAS, OpenMP, numba).
@@ -49,18 +50,38 @@ def apply_worker_environment() -> None:
         os.environ[name] = value
 
 
+#: How deep the current thread is inside :func:`single_threaded`.
+_DEPTH = threading.local()
+
+
 @contextlib.contextmanager
 def single_threaded() -> Iterator[None]:
     """Limit BLAS/OpenMP pools (threadpoolctl) to :data:`SAMPLE_THREADS` inside; numba's
     parallel pool is set to one thread too (and left there: every ttbpipe kernel is a serial
     ``@njit``, so this only keeps a parallel kernel from oversubscribing the cores; numba
-    refuses to raise the count again once its pool runs with fewer threads)."""
+    refuses to raise the count again once its pool runs with fewer threads).
+
+    Entered again inside itself (a pinned sample calling a pinned run), it does nothing: the
+    outer entry holds the limits, and threadpoolctl's scan of the loaded libraries costs about
+    2 ms an entry."""
+    depth = getattr(_DEPTH, "value", 0)
+    if depth:
+        _DEPTH.value = depth + 1
+        try:
+            yield
+        finally:
+            _DEPTH.value = depth
+        return
     import numba
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=SAMPLE_THREADS):
         numba.set_num_threads(SAMPLE_THREADS)
-        yield
+        _DEPTH.value = 1
+        try:
+            yield
+        finally:
+            _DEPTH.value = 0
 
 
 def pinned(function: F) -> F:

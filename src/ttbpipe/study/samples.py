@@ -76,11 +76,12 @@ STREAM_MC_PROFILES = streams.STUDY_MC_PROFILES
 def _mc_population(paths: tuple[str, ...], pooled_path: str | None,
                    band: tuple[float, float] | None):
     """Pooled PSD population of the Monte Carlo irregularity scenario (cached per process): the
-    pooled table when given (the workflow's, one file), else the campaigns' PSD tables."""
-    from ..tipm.population import pooled_population, read_pooled_population
+    pooled table when given (the workflow's, one file; its sections read as the samples ask for
+    them, :class:`~ttbpipe.tipm.population.PooledSections`), else the campaigns' PSD tables."""
+    from ..tipm.population import PooledSections, pooled_population
 
     if pooled_path is not None:
-        return read_pooled_population(pooled_path, band)
+        return PooledSections(pooled_path, band)
     return pooled_population(list(paths), band)
 
 
@@ -108,6 +109,8 @@ def mc_profile(population: Mapping[str, Any], study_seed: int, section: int,
     if not 0 <= int(section) < pop.n_sections:
         raise ValueError(f"irregularity_mc sample {sample_index}: section {section} outside the "
                          f"population of {pop.n_sections} sections")
+    if pooled is not None:
+        pop, section = pop.section(int(section)), 0
     table = profiles_from_psd_sets(
         pop.psd_mm2_m[[int(section)]], pop.frequency_per_m, pop.channels, [int(sample_index)],
         length_m=float(population["length_m"]), dx_m=float(population["dx_m"]),

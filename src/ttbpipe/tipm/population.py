@@ -24,8 +24,9 @@ import pandas as pd
 from ..channels import SPECTRAL_CHANNELS
 from ..io import read_provenance, read_table, write_table
 
-__all__ = ["PSDPopulation", "load_population", "pooled_population", "write_pooled_population",
-           "read_pooled_population", "synthetic_population", "population_dates"]
+__all__ = ["PSDPopulation", "PooledSections", "load_population", "pooled_population",
+           "write_pooled_population", "read_pooled_population", "synthetic_population",
+           "population_dates"]
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +37,9 @@ LONG_COLUMNS = ("section", "section_start_m", "section_end_m", "channel",
 POOLED_COLUMNS = ("population_section", "campaign_date", "section", "section_start_m",
                   "section_end_m", "spatial_frequency_per_m")
 POOLED_PSD_SUFFIX = "_psd_mm2_m"
+#: Sections per row group of a pooled table (:func:`write_pooled_population`): a Monte Carlo
+#: sample reads the row group that holds its section (:class:`PooledSections`), not the table.
+POOLED_SECTIONS_PER_ROW_GROUP = 16
 
 
 @dataclass
@@ -280,22 +284,124 @@ def write_pooled_population(paths: Sequence[str | Path], wavelength_band_m,
     population = pooled_population(paths, wavelength_band_m)
     band = None if wavelength_band_m is None else [float(b) for b in wavelength_band_m]
     write_table(population.to_pooled_table(), out, kind="pooled_psd_population",
+                row_group_size=population.frequency_per_m.size * POOLED_SECTIONS_PER_ROW_GROUP,
                 wavelength_band_m=band,
                 campaigns=sorted(set(population.sections["campaign_date"].astype(str))),
                 **provenance)
     return population
 
 
-def read_pooled_population(path: str | Path, wavelength_band_m) -> PSDPopulation:
-    """The population of :func:`write_pooled_population`'s table, which must have been pooled
-    over ``wavelength_band_m`` (the same frequencies :func:`load_population` would keep)."""
+def _check_pooled_band(path: str | Path, wavelength_band_m) -> None:
+    """Refuse a pooled table written for another wavelength band than ``wavelength_band_m``."""
     written = read_provenance(path).get("wavelength_band_m")
     wanted = None if wavelength_band_m is None else [float(b) for b in wavelength_band_m]
     if written != wanted:
         raise ValueError(f"{path}: pooled over the wavelength band {written} m, the study asks "
                          f"for {wanted} m; pool the PSD tables again with the study's psd."
                          "wavelength_band_m (workflow rule study_mc_population)")
+
+
+def read_pooled_population(path: str | Path, wavelength_band_m) -> PSDPopulation:
+    """The population of :func:`write_pooled_population`'s table, which must have been pooled
+    over ``wavelength_band_m`` (the same frequencies :func:`load_population` would keep)."""
+    _check_pooled_band(path, wavelength_band_m)
     return PSDPopulation.from_pooled_table(read_table(path), source=str(path))
+
+
+class PooledSections:
+    """The sections of a pooled table (:func:`write_pooled_population`), read as asked for.
+
+    A Monte Carlo batch draws a few dozen of the population's sections (paper case 3: 50 of
+    3 060); reading the whole table, 51 MB, and checking it took 1-1.6 s of every batch. Here
+    each section is read from the row groups that hold it (the ``population_section``
+    statistics of the file's row groups locate it; :data:`POOLED_SECTIONS_PER_ROW_GROUP`
+    sections per group), the last few groups kept, and checked as
+    :meth:`PSDPopulation.from_pooled_table` checks a table. The band is checked on opening; the
+    whole table is read and checked once per study by the design of the scenario
+    (:func:`read_pooled_population`). A table without the statistics is read whole, once.
+    """
+
+    #: Row groups kept in memory (a batch's sections are drawn at random).
+    KEPT_GROUPS = 4
+
+    def __init__(self, path: str | Path, wavelength_band_m):
+        import pyarrow.parquet as pq
+
+        _check_pooled_band(path, wavelength_band_m)
+        self.path = str(path)
+        self._file = pq.ParquetFile(self.path)
+        self._groups: dict[int, tuple] = {}
+        self._grid: np.ndarray | None = None
+        self._ranges = self._group_ranges()
+        self._whole = None
+        if self._ranges is None:
+            self._whole = PSDPopulation.from_pooled_table(read_table(self.path), source=self.path)
+
+    def _group_ranges(self) -> list[tuple[int, int]] | None:
+        """(first, last) population_section of every row group, checked to be section-major
+        from 0; None when the file has no statistics for it."""
+        meta = self._file.metadata
+        column = self._file.schema_arrow.get_field_index("population_section")
+        if column < 0:
+            raise ValueError(f"{self.path}: missing column population_section (a table of "
+                             "PSDPopulation.to_pooled_table)")
+        ranges = []
+        for g in range(meta.num_row_groups):
+            stats = meta.row_group(g).column(column).statistics
+            if stats is None or not stats.has_min_max:
+                return None
+            ranges.append((int(stats.min), int(stats.max)))
+        previous = -1
+        for g, (first, last) in enumerate(ranges):
+            if first > last or first not in (previous, previous + 1):
+                raise ValueError(f"{self.path}: row group {g} holds population_section "
+                                 f"{first}-{last} after {previous}; rows are not section-major "
+                                 "with population_section 0, 1, 2, ...")
+            previous = last
+        return ranges
+
+    @property
+    def n_sections(self) -> int:
+        if self._whole is not None:
+            return self._whole.n_sections
+        return self._ranges[-1][1] + 1 if self._ranges else 0
+
+    def _group(self, g: int):
+        """Row group ``g`` (an Arrow table) and its population_section column."""
+        if g not in self._groups:
+            if len(self._groups) >= self.KEPT_GROUPS:
+                self._groups.pop(next(iter(self._groups)))
+            table = self._file.read_row_group(g, use_threads=False)
+            self._groups[g] = (table, table.column("population_section").to_numpy())
+        return self._groups[g]
+
+    def section(self, section: int) -> PSDPopulation:
+        """Population section ``section`` alone (a population of one section)."""
+        import pyarrow as pa
+
+        section = int(section)
+        if not 0 <= section < self.n_sections:
+            raise ValueError(f"{self.path}: section {section} outside the population of "
+                             f"{self.n_sections} sections")
+        if self._whole is not None:
+            return self._whole.subset([section])
+        parts = []
+        for g, (first, last) in enumerate(self._ranges):
+            if first <= section <= last:
+                table, sections = self._group(g)
+                parts.append(table.take(np.flatnonzero(sections == section)))
+        rows = (pa.concat_tables(parts) if len(parts) > 1 else parts[0]).to_pandas()
+        source = f"{self.path}, population_section {section}"
+        if rows.empty:
+            raise ValueError(f"{source}: no rows; rows are not section-major with one block "
+                             "of frequencies per population_section 0, 1, 2, ...")
+        one = PSDPopulation.from_pooled_table(
+            rows.assign(population_section=0).reset_index(drop=True), source=source)
+        if self._grid is None:
+            self._grid = one.frequency_per_m
+        elif not np.array_equal(one.frequency_per_m, self._grid):
+            raise ValueError(f"{source}: sections do not share one frequency grid")
+        return one
 
 
 def synthetic_population(n_sections: int, frequency_per_m: np.ndarray, mean_psd: np.ndarray,
