@@ -30,6 +30,7 @@ from typing import Any, Callable, Mapping, Sequence
 import pandas as pd
 
 from ..io import write_table
+from ..memory import reuse_freed_memory
 from ..threads import WORKER_ENV
 from ..assessment.study import resolve_assessment, with_span_frequencies
 from .samples import ASSESSMENT_ROWS_KEY, resolve_simulation, run_sample
@@ -97,6 +98,7 @@ def dask_client(dask_cfg: Mapping[str, Any] | None = None):
         client = Client(address)
         log.info("dask: connected to scheduler %s (%d workers)", address,
                  len(client.scheduler_info().get("workers", {})))
+        client.run(reuse_freed_memory)
         for worker, env in client.run(_pin_threads).items():
             unpinned = [k for k, v in env.items() if v != "1"]
             if unpinned:
@@ -107,6 +109,7 @@ def dask_client(dask_cfg: Mapping[str, Any] | None = None):
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                            dashboard_address=None, env=dict(WORKER_ENV))
     client = Client(cluster)
+    client.run(reuse_freed_memory)
     log.info("dask: LocalCluster of %d single-threaded workers (%s)", n, WORKER_ENV)
     return client, cluster
 
@@ -178,6 +181,7 @@ def simulate_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapp
     """Run a batch and write its two tables atomically (nothing is written if a sample fails)."""
     from ..stats.schema import validate_extremes, validate_histories
 
+    reuse_freed_memory()   # the samples' arrays reused, not mapped afresh (ttbpipe.memory)
     assessed: list = []
     extremes, histories = run_batch(rows, config, profiles, executor=executor, runner=runner,
                                     metadata=assessed, span_frequencies=span_frequencies)
