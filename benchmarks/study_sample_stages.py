@@ -9,8 +9,8 @@ results/case3/study/mc_population.parquet is read where it exists, as the batche
 sample as a warm-up (population, structure, numba cache), then the next ``--samples`` ones
 through `ttbpipe.study.samples.run_sample` as a batch does, with `time.perf_counter` timers
 wrapped around its stages (profile, set-up, static state, train model, time loop, results table,
-summary, finiteness check, assessment), and prints each stage's mean per sample and the time
-outside the loop. Compare codes side by side (run the script of each checkout alternately).
+summary, finiteness check, assessment), and prints the warm-up sample's time outside its loop
+(a batch's first sample), each stage's mean per sample and the time outside the loop. Compare codes side by side (run the script of each checkout alternately).
 Timings only; the results are those of the batch (tests/test_study_batch.py).
 """
 
@@ -41,6 +41,12 @@ def main() -> None:
     from ttbpipe.study.batch import _sample_kwargs
     from ttbpipe.study.plan import mc_profile_settings
 
+    try:   # as ttbpipe.study.batch.simulate_batch does, in a checkout that has it
+        from ttbpipe.memory import reuse_freed_memory
+    except ImportError:
+        pass
+    else:
+        reuse_freed_memory()
     spent: collections.Counter = collections.Counter()
 
     def timed(module, name: str) -> None:
@@ -78,7 +84,11 @@ def main() -> None:
     profiles = {"irregularity_mc": population}
     kwargs = _sample_kwargs(config, profiles, root / "results/case3/study/span_frequencies.json")
     rows = design.sort_values("sample_index").to_dict("records")
+    start = time.perf_counter()
     samples.run_sample(rows[0], **kwargs)
+    first = time.perf_counter() - start
+    print(f"first sample (the population, the structure, numba's cache): {first:.3f} s, "
+          f"outside the time loop {first - spent['coupled.integrate']:.3f} s")
     spent.clear()
     start = time.perf_counter()
     for row in rows[1:1 + args.samples]:

@@ -41,6 +41,7 @@ class RunData:
     summary: Mapping[str, Any]
     config: Mapping[str, Any] | None = None
     wheelsets: list[str] = field(init=False)
+    _carbody: dict = field(init=False, default_factory=dict, repr=False)
 
     def __post_init__(self):
         if "time_s" not in self.table.columns:
@@ -194,13 +195,17 @@ class RunData:
         return dict(sorted(out.items()))
 
     def carbody(self, axis: str) -> tuple[list[str], np.ndarray]:
-        """(labels 'carC_point', (n, k) accelerations) along 'az' (vertical) or 'ay' (lateral)."""
-        keys = [k for k in self.carbody_columns if k[2] == axis]
-        if not keys:
-            raise ValueError(f"the history table has no car-body {axis} columns "
-                             "(carC_body_<point>_{az,ay}_m_s2)")
-        labels = [f"car{c}_{p}" for c, p, _ in keys]
-        return labels, self._columns([self.carbody_columns[k] for k in keys])
+        """(labels 'carC_point', (n, k) accelerations) along 'az' (vertical) or 'ay' (lateral);
+        read once per axis (several profiles ask), like the other histories."""
+        if axis not in self._carbody:
+            keys = [k for k in self.carbody_columns if k[2] == axis]
+            if not keys:
+                raise ValueError(f"the history table has no car-body {axis} columns "
+                                 "(carC_body_<point>_{az,ay}_m_s2)")
+            labels = [f"car{c}_{p}" for c, p, _ in keys]
+            self._carbody[axis] = (labels, self._columns([self.carbody_columns[k] for k in keys]))
+        labels, values = self._carbody[axis]
+        return list(labels), values
 
     def girder(self, quantity: str) -> dict[int, np.ndarray]:
         """{span (1-based): midspan vertical history at the girder's shear centre} for 'acc_m_s2'

@@ -80,7 +80,7 @@ def run_coupled(case_config: Mapping[str, Any], *, track: Irregularity | pd.Data
         log.warning("wheel-rail contact lost %d times on %d wheel(s), longest %.1f ms: %s",
                     summary["contact_loss_count"], summary["contact_loss_wheels"],
                     1e3 * summary["contact_loss_max_s"], text)
-    log.info("coupled run done: %.1f s wall, %.2f s per simulated s", raw.wall_s,
+    log.info("coupled run done: %.2f s wall, %.2f s per simulated s", raw.wall_s,
              summary["wall_s_per_simulated_s"])
     return table, summary
 

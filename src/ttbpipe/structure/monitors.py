@@ -9,6 +9,7 @@ Column names carry units: ``<name>_<dir>_disp_mm``, ``_vel_m_s``, ``_acc_m_s2`` 
 
 from __future__ import annotations
 
+import functools
 import re
 from collections import namedtuple
 from dataclasses import dataclass
@@ -202,6 +203,14 @@ def deck_columns(columns, axis: str, quantity: str = "acc_m_s2") -> dict[int, li
     rails on a double-track deck) where the run has them, else the girder's shear centre (runs
     with their own monitor lists).
     """
+    # a run's table is asked several times (its indices, then each standard), by a few hundred
+    # names: matched once per set of names
+    found = _deck_columns(tuple(columns), axis, quantity)
+    return {span: list(cols) for span, cols in found}
+
+
+@functools.lru_cache(maxsize=16)
+def _deck_columns(columns: tuple[str, ...], axis: str, quantity: str):
     deck: dict[int, list[str]] = {}
     girder: dict[int, list[str]] = {}
     for c in columns:
@@ -211,7 +220,7 @@ def deck_columns(columns, axis: str, quantity: str = "acc_m_s2") -> dict[int, li
         m = _GIRDER_COLUMN.match(c)
         if m and m.group(2) == axis and m.group(3) == quantity:
             girder.setdefault(int(m.group(1)), []).append(c)
-    return dict(sorted((deck or girder).items()))
+    return tuple((span, tuple(cols)) for span, cols in sorted((deck or girder).items()))
 
 
 def deck_monitor_name(side: str, span: int, track: int | None = None) -> str:

@@ -126,20 +126,19 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
         resid = f_g + f_c - k_susp @ q
         # block-diagonal contact Jacobian by finite differences, one wheelset DOF kind at a time
         # (the spin column is the derivative with respect to the spin RATE)
+        # entry (d_j, d_k) of wheelset w for DOF kinds k, w, j in that order
+        dofs = model.wheelset_dofs
         rows, cols, vals = [], [], []
         for k in range(5):
             dq = np.zeros(n)
             dv = np.zeros(n)
             eps = eps_v if k == PITCH else eps_q
-            (dv if k == PITCH else dq)[model.wheelset_dofs[:, k]] = eps
-            f_p, _ = contact_forces(q + dq, v + dv, model.wheelset_dofs, geom, speed, rail_kin,
-                                    yaw_rate)
-            f_m, _ = contact_forces(q - dq, v - dv, model.wheelset_dofs, geom, speed, rail_kin,
-                                    yaw_rate)
+            (dv if k == PITCH else dq)[dofs[:, k]] = eps
+            f_p, _ = contact_forces(q + dq, v + dv, dofs, geom, speed, rail_kin, yaw_rate)
+            f_m, _ = contact_forces(q - dq, v - dv, dofs, geom, speed, rail_kin, yaw_rate)
             df = (f_p - f_m) / (2 * eps)
-            for w in range(n_ws):
-                d = model.wheelset_dofs[w]
-                rows.append(d); cols.append(np.full(5, d[k])); vals.append(df[d])
+            rows.append(dofs.ravel()); cols.append(np.repeat(dofs[:, k], 5))
+            vals.append(df[dofs].ravel())
         jac_c = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                               shape=(n, n)).tocsr()
         jac = (k_susp - jac_c).tocsc()
