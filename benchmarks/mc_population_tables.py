@@ -10,8 +10,9 @@ batch does before its first run: the imports of `ttbpipe.study.samples` and the 
 profile (`mc_profile`), from the 36 tables (``psd_paths``) or from the pooled table
 (``pooled_path``). Prints each process's wall time and checks that both give the same profile.
 The child synthesises the profiles of eight sections (``SECTIONS``), as a batch's first
-samples do. ``--baseline-src DIR``: also the pooled table read by the code of another revision
-(its ``src`` folder, e.g. from ``git archive``), in the same rounds: side by side, old and new.
+samples do. ``--baseline-src DIR``: also the pooled table of the code of another revision (its
+``src`` folder, e.g. from ``git archive``), pooled and read by that code, in the same rounds:
+side by side, old and new.
 """
 
 from __future__ import annotations
@@ -39,6 +40,12 @@ for section in json.loads(sys.argv[2]):
     profile = mc_profile(population, 12345, section, sample_index=section + 3)
     digest.update(profile.to_numpy().tobytes())
 print(time.perf_counter() - start, digest.hexdigest()[:16])
+"""
+
+_POOL = """
+import sys, json
+from ttbpipe.tipm.population import write_pooled_population
+write_pooled_population(json.loads(sys.argv[1]), json.loads(sys.argv[2]), sys.argv[3])
 """
 
 #: Population sections whose profiles the child synthesises (the first, the last, and some
@@ -73,8 +80,15 @@ def main() -> None:
         variants = {"36 campaign tables": ({**settings, "psd_paths": paths}, None),
                     "pooled table": ({**settings, "pooled_path": str(pooled)}, None)}
         if args.baseline_src is not None:
-            variants["pooled table, baseline"] = ({**settings, "pooled_path": str(pooled)},
-                                                  str(args.baseline_src.resolve()))
+            # the baseline's own pooled table (its row groups), pooled by its code
+            src = str(args.baseline_src.resolve())
+            old_pooled = Path(folder) / "mc_population_baseline.parquet"
+            subprocess.run([sys.executable, "-c", _POOL, json.dumps(paths),
+                            json.dumps(settings["wavelength_band_m"]), str(old_pooled)],
+                           check=True, env={**os.environ, "PYTHONPATH": src})
+            print(f"the baseline's pooled table: {old_pooled.stat().st_size / 1e6:.1f} MB")
+            variants["pooled table, baseline"] = ({**settings, "pooled_path": str(old_pooled)},
+                                                  src)
         seen: dict[str, set[str]] = {name: set() for name in variants}
         print(f"imports and the profiles of {len(sections)} sections, wall s per fresh process:")
         for round_ in range(args.rounds):

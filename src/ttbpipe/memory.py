@@ -7,8 +7,9 @@ the trim threshold (twice the mmap threshold). A sample allocates and frees arra
 MB each (paper case 3: the 463-column history table, 13 MB, its copies in the finiteness check
 and the tables of the run), and every fresh page costs a page fault on first touch. Measured on
 case 3's Monte Carlo samples (``benchmarks/study_sample_stages.py``, 12 samples, the code of
-2026-12-06): the finiteness check took 11-22 ms and the results table 8-12 ms a sample, against
-1.5 and 4.3 ms when the memory is reused (`docs/performance.md`, "The work around each run").
+2026-12-06): the finiteness check took 11-22 ms and the results table 8-13 ms a sample, against
+1.5 and 4.3 ms when the memory is reused (docs/performance.md, "The work around each run of a
+batch").
 
 :func:`reuse_freed_memory` fixes both thresholds (``mallopt``), so that blocks below
 :data:`MMAP_THRESHOLD_BYTES` come from the heap and are reused, and up to
