@@ -312,7 +312,7 @@ class PooledSections:
     """The sections of a pooled table (:func:`write_pooled_population`), read as asked for.
 
     A Monte Carlo batch draws a few dozen of the population's sections (paper case 3: 50 of
-    3 060); reading the whole table, 51 MB, and checking it took 1-1.6 s of every batch. Here
+    3 060); reading the whole table, 51 MB, and checking it took 0.5-1.6 s of every batch. Here
     each section is read from the row groups that hold it (the ``population_section``
     statistics of the file's row groups locate it; :data:`POOLED_SECTIONS_PER_ROW_GROUP`
     sections per group), the last few groups kept, and checked as
