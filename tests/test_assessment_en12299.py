@@ -80,3 +80,16 @@ def test_profile_row_on_a_short_record_says_it_used_one_window():
     # one window of the whole record: N_MV = 6 x its weighted r.m.s.
     rms = np.sqrt(np.mean(WB.apply(table["car1_body_front_az_m_s2"].to_numpy(), DT) ** 2))
     assert r["processed_value"] == pytest.approx(6 * rms, rel=1e-12)
+
+
+def test_a_weighting_is_designed_once_per_rate_and_handed_out_as_a_copy():
+    """The cached sections equal a fresh design (the undecorated function) at each rate; a
+    caller writing into its copy does not change the next caller's."""
+    from ttbpipe.assessment.en12299 import _weighting_design
+
+    first = WB.sos(1000.0)
+    np.testing.assert_array_equal(first, _weighting_design.__wrapped__(WB, 1000.0))
+    first[:] = 0.0
+    np.testing.assert_array_equal(WB.sos(1000.0), _weighting_design.__wrapped__(WB, 1000.0))
+    assert not np.array_equal(WB.sos(500.0), WB.sos(1000.0))
+    assert not np.array_equal(WD.sos(1000.0), WB.sos(1000.0))

@@ -41,6 +41,7 @@ of the standard: it is then evaluated as one window (logged, and said in the row
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from dataclasses import dataclass
@@ -100,17 +101,10 @@ class Weighting:
         return np.abs(h)
 
     def sos(self, fs_hz: float) -> np.ndarray:
-        """Second-order sections of the bilinear transform at ``fs_hz``."""
-        from scipy import signal
-
-        z, p, k = [], [], 1.0
-        for num, den in self._sections():
-            zz, pp, kk = signal.tf2zpk(num, den)
-            z += list(zz)
-            p += list(pp)
-            k *= kk
-        zd, pd_, kd = signal.bilinear_zpk(np.array(z), np.array(p), k, fs_hz)
-        return signal.zpk2sos(zd, pd_, kd)
+        """Second-order sections of the bilinear transform at ``fs_hz``: designed once per
+        weighting and sampling rate in a process (every sample of a study weights its records
+        alike), a copy each call."""
+        return _weighting_design(self, float(fs_hz)).copy()
 
     def digital_gain(self, freq_hz: np.ndarray, dt_s: float) -> np.ndarray:
         from scipy import signal
@@ -123,6 +117,20 @@ class Weighting:
         from scipy import signal
 
         return signal.sosfilt(self.sos(1.0 / dt_s), np.asarray(values, dtype=float), axis=0)
+
+
+@functools.lru_cache(maxsize=32)
+def _weighting_design(weighting: Weighting, fs_hz: float) -> np.ndarray:
+    from scipy import signal
+
+    z, p, k = [], [], 1.0
+    for num, den in weighting._sections():
+        zz, pp, kk = signal.tf2zpk(num, den)
+        z += list(zz)
+        p += list(pp)
+        k *= kk
+    zd, pd_, kd = signal.bilinear_zpk(np.array(z), np.array(p), k, fs_hz)
+    return signal.zpk2sos(zd, pd_, kd)
 
 
 WB = Weighting("Wb", 0.4, 100.0, 16.0, 16.0, 0.63, 2.5, 0.8, 4.0, 0.8, 0.4)

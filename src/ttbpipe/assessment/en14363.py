@@ -104,8 +104,8 @@ def evaluate(run: RunData, options) -> list[Row]:
                                                "percentile_quasi_static"))
     keep = filt.interior(run.table.shape[0], run.dt_s)     # without the filter's start-up
     x = run.x_m[keep]
-    P = filt.apply(run.P_N, run.dt_s)[keep]
-    Y = (filt.apply(run.Q_N, run.dt_s) * run.wheel_side_sign)[keep]     # climbing sense
+    P = run.filtered(filt, "P_N")[keep]
+    Y = (run.filtered(filt, "Q_N") * run.wheel_side_sign)[keep]     # climbing sense
     on = run.in_contact[keep] & (P > 0.0)
     yq = np.where(on, Y / np.where(on, P, 1.0), 0.0)
     rows = []
@@ -128,7 +128,7 @@ def evaluate(run: RunData, options) -> list[Row]:
                                        "filtered forces", _SOURCE]))),
     ).with_filter(filt))
 
-    H = filt.apply(run.H_N, run.dt_s)[keep]
+    H = run.filtered(filt, "H_N")[keep]
     _, h2m = sliding_mean(x, H, window, step)
     f12 = np.maximum(np.abs(np.atleast_1d(percentile(h2m, hi))),
                      np.abs(np.atleast_1d(percentile(h2m, lo))))

@@ -97,8 +97,8 @@ def evaluate(run: RunData, options) -> list[Row]:
     dt = run.dt_s
     keep = filt.interior(run.table.shape[0], dt)     # without the filter's start-up
     x = run.x_m[keep]
-    P = filt.apply(run.P_N, dt)[keep]
-    Q = filt.apply(run.Q_N, dt)[keep]
+    P = run.filtered(filt, "P_N")[keep]
+    Q = run.filtered(filt, "Q_N")[keep]
     on = run.in_contact[keep] & (P > 0.0)
     stat = f"{pct:g} % percentile of the {seg:g} m piece maxima"
     rows = []
@@ -135,7 +135,7 @@ def evaluate(run: RunData, options) -> list[Row]:
         notes="(P0 - P)/P0 from the filtered P, P0 the static wheel load; 1 off the rail",
     ).with_filter(filt))
 
-    H = np.abs(filt.apply(run.H_N, dt)[keep])
+    H = np.abs(run.filtered(filt, "H_N")[keep])
     value = np.atleast_1d(percentile(segment_maxima(x, H, seg)[1], pct))
     lim_h = limits["lateral_wheelset_force"]
     axle = run.static_wheel_load_N.sum(axis=1)
