@@ -1,10 +1,11 @@
 """Samples that share a structure share one model (ttbpipe.simulation.setup._nominal_structure):
 its global matrices, stability analysis and static factorisation are made once per process
-(ttbpipe.structure.StructureModel.derived); samples that share a train share its assembled model
-(ttbpipe.simulation.setup._train_model). Reference: the same run on a freshly built model
-(the cache emptied first); the shared model must give it bit for bit (the project's determinism
-rule: a sample's results depend on its inputs only, not on the samples run before it in the
-process). Real coupled runs on one 32 m span, one car, 10 m of run (a few seconds)."""
+(ttbpipe.structure.StructureModel.derived), with its compiled monitors; samples that share a
+train share its assembled model (ttbpipe.simulation.setup._train_model) and a conical tread's
+contact table (ttbpipe.vehicle.contact._conical_table). Reference: the same run on a freshly
+built model (the caches emptied first); the shared model must give it bit for bit (the project's
+determinism rule: a sample's results depend on its inputs only, not on the samples run before
+it in the process). Real coupled runs on one 32 m span, one car, 10 m of run (a few seconds)."""
 
 import copy
 
@@ -16,6 +17,7 @@ from ttbpipe.simulation import setup as coupled_setup  # not "setup": a pytest h
 from ttbpipe.simulation.coupled import run_coupled
 from ttbpipe.study import samples as study_samples
 from ttbpipe.timestepping.limits import stable_time_step
+from ttbpipe.vehicle import contact as vehicle_contact
 
 STRUCTURE = {"layout": {"approach_length_m": 30.0, "spans_m": [32.0],
                         "approach_track": "ballasted", "bridge_track": "slab"}}
@@ -37,12 +39,16 @@ def fresh_runs():
     """Seeds 1 and 2, each on a freshly built structure (nothing cached before it)."""
     out = {}
     for seed in (1, 2):
-        coupled_setup._NOMINAL_STRUCTURES.clear()
-        coupled_setup._TRAINS.clear()
+        clear_caches()
         out[seed] = run(seed)
+    clear_caches()
+    return out
+
+
+def clear_caches():
     coupled_setup._NOMINAL_STRUCTURES.clear()
     coupled_setup._TRAINS.clear()
-    return out
+    vehicle_contact._conical_table.cache_clear()
 
 
 def assert_same_run(a, b):
@@ -64,6 +70,33 @@ def test_a_shared_model_gives_the_fresh_models_results_bit_for_bit(fresh_runs):
     assert again.model is first.model
     assert again.structure.matrices() is first.structure.matrices()
     assert set(first.structure._derived) >= {"matrices", "static", ("stability", 6)}
+    assert again.monitors is first.monitors
+    # the contact table is shared as numbers, not as an array a run could write into
+    assert again.geom.table is not first.geom.table
+    np.testing.assert_array_equal(again.geom.table, first.geom.table)
+
+
+def test_compiled_monitors_follow_the_monitor_list_and_the_contact_table_its_cone():
+    """Another monitor list compiles its own rows on the shared model, equal to a fresh
+    compilation; another conicity fills another contact table, equal to a fresh one."""
+    from ttbpipe.structure.monitors import compile_monitors, default_monitors
+
+    clear_caches()
+    first = coupled_setup.prepare(case(1))
+    specs = default_monitors(first.structure)[:3]
+    fewer = coupled_setup.prepare({**case(1), "monitors": specs})
+    assert fewer.structure is first.structure and fewer.monitors is not first.monitors
+    fresh = compile_monitors(first.structure, specs)
+    assert fewer.monitors.names == fresh.names
+    for name in ("ptr", "dof", "coef", "qty", "scale"):
+        np.testing.assert_array_equal(getattr(fewer.monitors, name), getattr(fresh, name))
+    steeper = copy.deepcopy(case(1))
+    steeper["train"]["contact"] = {"profile": "conical", "conicity": 0.1}
+    table = coupled_setup.prepare(steeper).geom.table
+    radius = vehicle_contact.COL_R
+    assert not np.array_equal(table[:, radius], first.geom.table[:, radius])
+    vehicle_contact._conical_table.cache_clear()
+    np.testing.assert_array_equal(coupled_setup.prepare(steeper).geom.table, table)
 
 
 def test_property_factors_build_their_own_model_and_leave_the_shared_one_unchanged(fresh_runs):

@@ -441,7 +441,10 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
         packed = structure.packed
         mesh = rail_mesh(packed, structure.rail_head_height_m)
         x_lead0, x_end = _run_span(sim, structure, train_len, margin, direction)
-        monitors = compile_monitors(structure, case.get("monitors") or default_monitors(structure))
+        specs = case.get("monitors") or default_monitors(structure)
+        # compiled once per model and list (the samples sharing a structure share its rows)
+        monitors = structure.derived(("monitors", json.dumps(specs, sort_keys=True, default=str)),
+                                     lambda: compile_monitors(structure, specs))
     else:
         raise ValueError(f"simulation.track: {track_kind!r}; expected structure | rigid")
     if geom.zones is not None:

@@ -56,6 +56,7 @@ forces (:func:`_wheel_contact_points`).
 
 from __future__ import annotations
 
+import functools
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -290,15 +291,26 @@ def _fill_ellipse_and_kalker(table: np.ndarray, wheel_transverse_radius: np.ndar
 
 def conical_geometry(p: ContactParameters, half_range: float = 0.03, n: int = 61) -> ContactGeometry:
     """Geometry table of a conical tread with conicity lambda on a rail head of radius R_r."""
+    table = _conical_table(float(p.wheel_radius), float(p.conicity),
+                           float(p.wheel_transverse_radius), float(p.rail_head_radius),
+                           float(half_range), int(n)).copy()
+    tread = "cone" if p.hertz_law in ("auto", "cone") else "worn"
+    return _geometry(table, p, tread, f"conical tread, conicity {p.conicity}")
+
+
+@functools.lru_cache(maxsize=16)
+def _conical_table(wheel_radius: float, conicity: float, wheel_transverse_radius: float,
+                   rail_head_radius: float, half_range: float, n: int) -> np.ndarray:
+    # filled once per process and geometry (every sample of a study builds the same cone;
+    # the Hertz ellipse and Kalker coefficients take a root search per row)
     y = np.linspace(-half_range, half_range, n)
     table = np.zeros((n, N_COLS))
     table[:, COL_Y] = y
-    table[:, COL_R] = p.wheel_radius + p.conicity * y
-    table[:, COL_DZ] = p.conicity * y
-    table[:, COL_DELTA] = np.arctan(p.conicity)
-    _fill_ellipse_and_kalker(table, np.full(n, p.wheel_transverse_radius), p.rail_head_radius)
-    tread = "cone" if p.hertz_law in ("auto", "cone") else "worn"
-    return _geometry(table, p, tread, f"conical tread, conicity {p.conicity}")
+    table[:, COL_R] = wheel_radius + conicity * y
+    table[:, COL_DZ] = conicity * y
+    table[:, COL_DELTA] = np.arctan(conicity)
+    _fill_ellipse_and_kalker(table, np.full(n, wheel_transverse_radius), rail_head_radius)
+    return table
 
 
 def demo_worn_table(p: ContactParameters, half_range: float = 0.03, n: int = 121,

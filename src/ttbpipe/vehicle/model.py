@@ -37,6 +37,7 @@ equilibrium (see :mod:`ttbpipe.vehicle.static`).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -205,6 +206,12 @@ class TrainModel:
     @property
     def n_wheelsets(self) -> int:
         return self.wheelset_x.size
+
+    @functools.cached_property
+    def suspension_stiffness(self) -> sp.csr_matrix:
+        """K without the couplers (the static solve holds each car on its own suspension):
+        formed once per model, read-only."""
+        return (self.stiffness - self.coupler_stiffness).tocsr()
 
 
 def build_train_model(train: TrainParameters) -> TrainModel:

@@ -104,7 +104,7 @@ def solve_vehicle_static(model: TrainModel, geom, speed: float, rail_kin: np.nda
     n_ws = model.n_wheelsets
     if rail_kin is None:
         rail_kin = np.zeros((n_ws, 2, RAIL_KIN_COLS))
-    k_susp = (model.stiffness - model.coupler_stiffness).tocsr()
+    k_susp = model.suspension_stiffness
     spin = np.zeros(n, dtype=bool)
     spin[model.wheelset_dofs[:, PITCH]] = True
     q = rail_following_guess(model, geom, rail_kin)
