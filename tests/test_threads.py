@@ -59,27 +59,33 @@ def test_session_environment_is_set_before_numba_loads():
 
 def test_nested_entries_keep_the_outer_limits_and_scan_once(monkeypatch):
     """A pinned sample calling a pinned run scans the loaded libraries once (threadpoolctl's
-    scan costs about 2 ms an entry), holds one thread in every BLAS/OpenMP pool at every depth,
-    and the outer exit restores what was there before."""
+    scan reads /proc/self/maps, 1-3 ms), holds one thread in every BLAS/OpenMP pool at every
+    depth, and the outer exit restores what was there before. Later entries reuse the scan
+    until a module is imported, then scan again."""
+    import types
+
     import threadpoolctl
 
+    from ttbpipe import threads as ttb_threads
     from ttbpipe.threads import SAMPLE_THREADS, single_threaded
 
     import scipy.linalg  # noqa: F401  (a BLAS library loaded, whatever ran before)
 
-    def threads():
-        return {lib["filepath"]: lib["num_threads"] for lib in threadpoolctl.threadpool_info()}
+    scans = []
+    real = threadpoolctl.ThreadpoolController
 
-    entries = []
-    real = threadpoolctl.threadpool_limits
+    def threads():   # a scan of its own, not counted
+        return {lib["filepath"]: lib["num_threads"] for lib in real().info()}
 
-    def counted(*args, **kwargs):
-        entries.append(kwargs)
-        return real(*args, **kwargs)
+    class Counted(real):
+        def __init__(self):
+            scans.append(1)
+            super().__init__()
 
-    with real(limits=2):   # so that the restore shows
+    monkeypatch.setattr(ttb_threads, "_CONTROLLER", {})
+    with threadpoolctl.threadpool_limits(limits=2):   # so that the restore shows
         before = threads()
-        monkeypatch.setattr(threadpoolctl, "threadpool_limits", counted)
+        monkeypatch.setattr(threadpoolctl, "ThreadpoolController", Counted)
         with single_threaded():
             assert set(threads().values()) == {SAMPLE_THREADS}
             with single_threaded():
@@ -87,9 +93,14 @@ def test_nested_entries_keep_the_outer_limits_and_scan_once(monkeypatch):
                     assert set(threads().values()) == {SAMPLE_THREADS}
             assert set(threads().values()) == {SAMPLE_THREADS}
         after = threads()
-    assert 2 in before.values()
-    assert {lib: after[lib] for lib in before} == before
-    assert len(entries) == 1
-    with single_threaded():   # and again after the outer exit
-        pass
-    assert len(entries) == 2
+        assert 2 in before.values()
+        assert {lib: after[lib] for lib in before} == before
+        assert len(scans) == 1
+        with single_threaded():   # again after the outer exit: the same libraries, no scan
+            assert set(threads().values()) == {SAMPLE_THREADS}
+        assert len(scans) == 1
+        assert {lib: threads()[lib] for lib in before} == before
+        monkeypatch.setitem(sys.modules, "ttbpipe_test_new_module", types.ModuleType("m"))
+        with single_threaded():   # a module imported since: scanned again
+            assert set(threads().values()) == {SAMPLE_THREADS}
+        assert len(scans) == 2

@@ -62,8 +62,7 @@ def single_threaded() -> Iterator[None]:
     refuses to raise the count again once its pool runs with fewer threads).
 
     Entered again inside itself (a pinned sample calling a pinned run), it does nothing: the
-    outer entry holds the limits, and threadpoolctl's scan of the loaded libraries costs about
-    2 ms an entry."""
+    outer entry holds the limits. The libraries are found by :func:`_threadpool_controller`."""
     depth = getattr(_DEPTH, "value", 0)
     if depth:
         _DEPTH.value = depth + 1
@@ -73,15 +72,36 @@ def single_threaded() -> Iterator[None]:
             _DEPTH.value = depth
         return
     import numba
-    from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(limits=SAMPLE_THREADS):
-        numba.set_num_threads(SAMPLE_THREADS)
+    # numba first: its first call loads the threading layer, which the scan then sees
+    numba.set_num_threads(SAMPLE_THREADS)
+    with _threadpool_controller().limit(limits=SAMPLE_THREADS):
         _DEPTH.value = 1
         try:
             yield
         finally:
             _DEPTH.value = 0
+
+
+#: threadpoolctl's controller of the loaded libraries and the module count it was made at.
+_CONTROLLER: dict[str, Any] = {}
+
+
+def _threadpool_controller():
+    """threadpoolctl's ``ThreadpoolController`` of the BLAS/OpenMP libraries loaded in this
+    process, scanned again whenever a module has been imported since the last scan: native
+    libraries are loaded by the extension modules that need them, so a process that imports
+    nothing new keeps the same libraries. A scan reads ``/proc/self/maps``: 1-3 ms in a batch
+    process, which each sample paid when every entry scanned (``threadpool_limits``)."""
+    import sys
+
+    from threadpoolctl import ThreadpoolController
+
+    modules = len(sys.modules)
+    if _CONTROLLER.get("modules") != modules:
+        _CONTROLLER["controller"] = ThreadpoolController()
+        _CONTROLLER["modules"] = len(sys.modules)
+    return _CONTROLLER["controller"]
 
 
 def pinned(function: F) -> F:
