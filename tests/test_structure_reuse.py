@@ -90,6 +90,11 @@ def test_compiled_monitors_follow_the_monitor_list_and_the_contact_table_its_con
     assert fewer.monitors.names == fresh.names
     for name in ("ptr", "dof", "coef", "qty", "scale"):
         np.testing.assert_array_equal(getattr(fewer.monitors, name), getattr(fresh, name))
+    # a list that is not plain data (a numpy integer) is compiled for its run alone
+    numpy_rail = [{**specs[0], "rail": np.int64(specs[0].get("rail", 0))}]
+    a = coupled_setup.prepare({**case(1), "monitors": numpy_rail}).monitors
+    assert a is not coupled_setup.prepare({**case(1), "monitors": numpy_rail}).monitors
+    assert a.names == compile_monitors(first.structure, numpy_rail).names
     steeper = copy.deepcopy(case(1))
     steeper["train"]["contact"] = {"profile": "conical", "conicity": 0.1}
     table = coupled_setup.prepare(steeper).geom.table

@@ -442,9 +442,12 @@ def prepare(case: Mapping[str, Any], *, track: Irregularity | pd.DataFrame | Non
         mesh = rail_mesh(packed, structure.rail_head_height_m)
         x_lead0, x_end = _run_span(sim, structure, train_len, margin, direction)
         specs = case.get("monitors") or default_monitors(structure)
-        # compiled once per model and list (the samples sharing a structure share its rows)
-        monitors = structure.derived(("monitors", json.dumps(specs, sort_keys=True, default=str)),
-                                     lambda: compile_monitors(structure, specs))
+        try:   # compiled once per model and list (samples sharing a structure share its rows)
+            key = ("monitors", json.dumps(specs, sort_keys=True, allow_nan=False))
+        except (TypeError, ValueError):      # not plain data: compiled for this run alone
+            key = None
+        monitors = (compile_monitors(structure, specs) if key is None else
+                    structure.derived(key, lambda: compile_monitors(structure, specs)))
     else:
         raise ValueError(f"simulation.track: {track_kind!r}; expected structure | rigid")
     if geom.zones is not None:
