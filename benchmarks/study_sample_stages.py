@@ -10,7 +10,8 @@ sample as a warm-up (population, structure, numba cache), then the next ``--samp
 through `ttbpipe.study.samples.run_sample` as a batch does, with `time.perf_counter` timers
 wrapped around its stages (profile, set-up, static state, train model, time loop, results table,
 summary, finiteness check, assessment), and prints the warm-up sample's time outside its loop
-(a batch's first sample), each stage's mean per sample and the time outside the loop. Compare codes side by side (run the script of each checkout alternately).
+(a batch's first sample), each stage's mean per sample and the time outside the loop. Compare
+codes side by side (run the script of each checkout alternately).
 Timings only; the results are those of the batch (tests/test_study_batch.py).
 """
 

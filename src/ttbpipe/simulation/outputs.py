@@ -160,14 +160,15 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
     if setup.monitors is not None:
         peaks = {name: float(raw.monitors.peak[i]) for i, name in enumerate(setup.monitors.names)}
         dt_out = float(np.median(np.diff(table["time_s"].to_numpy())))
-        names = list(dict.fromkeys(c for axis in ("z", "y")
-                                   for cols in deck_columns(table.columns, axis).values()
-                                   for c in cols))
-        if names:
-            values = np.column_stack([table[c].to_numpy(float) for c in names])
-            deck_peak = dict(zip(names, lowpass_peaks(values, dt_out, deck_filter_hz).tolist()))
+        deck_names = list(dict.fromkeys(c for axis in ("z", "y")
+                                        for cols in deck_columns(names, axis).values()
+                                        for c in cols))
+        if deck_names:
+            values = np.column_stack([table[c].to_numpy(float) for c in deck_names])
+            deck_peak = dict(zip(deck_names,
+                                 lowpass_peaks(values, dt_out, deck_filter_hz).tolist()))
         for direction, axis in (("vertical", "z"), ("lateral", "y")):
-            deck = [c for cols in deck_columns(table.columns, axis).values() for c in cols]
+            deck = [c for cols in deck_columns(names, axis).values() for c in cols]
             rail = [k for k in peaks if k.startswith("rail_") and k.endswith(f"_{axis}_acc_m_s2")]
             if deck:
                 out[f"max_deck_{direction}_acc_m_s2"] = max(deck_peak[c] for c in deck)
@@ -181,7 +182,7 @@ def response_indices(setup: CoupledSetup, raw, table: pd.DataFrame,
         out[PER_CAR[0 if direction == "vertical" else 1].format(car=car[3:])] = float(value)
     if setup.monitors is not None:
         for axis, name in zip(("z", "y"), PER_SPAN):
-            for s, cols in deck_columns(table.columns, axis).items():
+            for s, cols in deck_columns(names, axis).items():
                 out[name.format(span=s)] = max(deck_peak[c] for c in cols)
     return out
 

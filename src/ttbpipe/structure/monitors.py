@@ -204,8 +204,8 @@ def deck_columns(columns, axis: str, quantity: str = "acc_m_s2") -> dict[int, li
     with their own monitor lists).
     """
     # a run's table is asked several times (its indices, then each standard), by a few hundred
-    # names: matched once per set of names
-    # a DataFrame's Index as a list first: iterating the Index itself is ten times slower
+    # names: matched once per set of names (a DataFrame's Index as a list first: iterating the
+    # Index itself is ten times slower)
     names = columns.tolist() if hasattr(columns, "tolist") else list(columns)
     found = _deck_columns(tuple(names), axis, quantity)
     return {span: list(cols) for span, cols in found}
