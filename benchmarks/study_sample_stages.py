@@ -20,12 +20,10 @@ from __future__ import annotations
 import argparse
 import collections
 import functools
-import glob
 import time
 from pathlib import Path
 
-import yaml
-from snakemake.utils import update_config
+from _study_samples import mc_sample_inputs
 
 
 def main() -> None:
@@ -37,10 +35,7 @@ def main() -> None:
     import ttbpipe.assessment.study as assessment_study
     import ttbpipe.simulation.coupled as coupled
     import ttbpipe.simulation.setup as setup
-    from ttbpipe.io import read_table
     from ttbpipe.study import samples
-    from ttbpipe.study.batch import _sample_kwargs
-    from ttbpipe.study.plan import mc_profile_settings
 
     try:   # as ttbpipe.study.batch.simulate_batch does, in a checkout that has it
         from ttbpipe.memory import reuse_freed_memory
@@ -72,19 +67,7 @@ def main() -> None:
                          (assessment_study, "assess_sample")]:
         timed(module, name)
 
-    root = args.root
-    # the study configuration as `snakemake --configfile config/case3.yaml` merges it
-    config = yaml.safe_load((root / "config/config.yaml").read_text())
-    update_config(config, yaml.safe_load((root / "config/case3.yaml").read_text()))
-    design = read_table(root / "results/case3/study/design/mc.parquet")
-    paths = sorted(glob.glob(str(root / "results/case3/psd/*.parquet")))
-    population = {**mc_profile_settings(config), "date": max(Path(p).stem for p in paths)}
-    pooled = root / "results/case3/study/mc_population.parquet"
-    # the pooled table where the workflow wrote it, as a batch reads it; else the 36 tables
-    population.update({"pooled_path": str(pooled)} if pooled.is_file() else {"psd_paths": paths})
-    profiles = {"irregularity_mc": population}
-    kwargs = _sample_kwargs(config, profiles, root / "results/case3/study/span_frequencies.json")
-    rows = design.sort_values("sample_index").to_dict("records")
+    _, rows, kwargs = mc_sample_inputs(args.root)
     start = time.perf_counter()
     samples.run_sample(rows[0], **kwargs)
     first = time.perf_counter() - start

@@ -34,8 +34,7 @@ from pathlib import Path
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
-import yaml  # noqa: E402
-from snakemake.utils import update_config  # noqa: E402
+from _study_samples import mc_sample_inputs  # noqa: E402
 
 
 def main() -> None:
@@ -49,10 +48,7 @@ def main() -> None:
     args = parser.parse_args()
 
     import ttbpipe.simulation.coupled as coupled
-    from ttbpipe.io import read_table
     from ttbpipe.study import samples
-    from ttbpipe.study.batch import _sample_kwargs
-    from ttbpipe.study.plan import mc_profile_settings
 
     loop_cpu: list[float] = []
     steps: list[int] = []
@@ -69,23 +65,12 @@ def main() -> None:
 
     coupled.integrate = timed_integrate
 
-    root = args.root
-    config = yaml.safe_load((root / "config/config.yaml").read_text())
-    update_config(config, yaml.safe_load((root / args.configfile).read_text()))
-    results = root / config["results_dir"]
-    design = read_table(results / "study/design/mc.parquet")
-    pooled = results / "study/mc_population.parquet"
-    paths = sorted(str(p) for p in (results / "psd").glob("*.parquet"))
-    population = {**mc_profile_settings(config), "date": max(Path(p).stem for p in paths)}
-    # the pooled table where the workflow wrote it, as a batch reads it; else the campaigns' tables
-    population.update({"pooled_path": str(pooled)} if pooled.is_file() else {"psd_paths": paths})
-    kwargs = _sample_kwargs(config, {"irregularity_mc": population},
-                            results / "study/span_frequencies.json")
+    _, design_rows, kwargs = mc_sample_inputs(args.root, args.configfile)
     variants = {"whole track": copy.deepcopy(kwargs), f"window {args.margin:g} m": copy.deepcopy(kwargs)}
     variants["whole track"]["sim"].pop("track_window_m", None)
     variants[f"window {args.margin:g} m"]["sim"]["track_window_m"] = float(args.margin)
 
-    rows = design.sort_values("sample_index").to_dict("records")[args.first:args.first + args.samples]
+    rows = design_rows[args.first:args.first + args.samples]
     extremes: dict[str, list[dict]] = {name: [] for name in variants}
     histories: dict[str, list] = {name: [] for name in variants}
     per_step: dict[str, list[float]] = {name: [] for name in variants}
@@ -97,7 +82,7 @@ def main() -> None:
             histories[name].append(history)
     names = list(variants)
     base, other = names
-    print(f"{root / args.configfile}: {len(rows)} Monte Carlo samples (design rows "
+    print(f"{args.root / args.configfile}: {len(rows)} Monte Carlo samples (design rows "
           f"{args.first}-{args.first + len(rows) - 1}), {steps[-1]} steps each")
     for name in names:
         median = float(np.median(per_step[name]))
