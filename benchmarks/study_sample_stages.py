@@ -23,7 +23,7 @@ import functools
 import time
 from pathlib import Path
 
-from _study_samples import mc_sample_inputs
+from _study_samples import study_sample_inputs
 
 
 def main() -> None:
@@ -67,7 +67,7 @@ def main() -> None:
                          (assessment_study, "assess_sample")]:
         timed(module, name)
 
-    _, rows, kwargs = mc_sample_inputs(args.root)
+    _, rows, kwargs = study_sample_inputs(args.root)
     start = time.perf_counter()
     samples.run_sample(rows[0], **kwargs)
     first = time.perf_counter() - start

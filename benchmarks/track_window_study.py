@@ -1,11 +1,13 @@
 """The moving track window on a study's own samples: time per step and every result, against the whole track.
 
     NUMBA_NUM_THREADS=1 python benchmarks/track_window_study.py ROOT [--configfile config/case3.yaml]
-        [--margin 20] [--samples 8] [--first 1]
+        [--scenario mc] [--margin 20] [--samples 8] [--first 1]
 
 ROOT: a clone in which `snakemake --cores 2 --configfile config/case3.yaml` has written at least
 the Monte Carlo design, the pooled population (or the PSD tables) and the span frequencies (as
-for benchmarks/study_sample_stages.py). Runs the design's samples ``first .. first + samples - 1``
+for benchmarks/study_sample_stages.py), or, for a fields scenario of paper case 2 (``--configfile
+config/case2.yaml --scenario C1``; C1 .. C4, C4_mc), that scenario's design and the span
+frequencies. Runs the design's samples ``first .. first + samples - 1``
 through `ttbpipe.study.samples.run_sample`, as a batch does, once with the configuration's
 track (``simulation.track_window_m`` removed: the whole track moves) and once with the window
 of ``--margin`` m, the two alternating sample by sample in one process, and prints
@@ -34,13 +36,15 @@ from pathlib import Path
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
-from _study_samples import mc_sample_inputs  # noqa: E402
+from _study_samples import study_sample_inputs  # noqa: E402
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("root", type=Path)
     parser.add_argument("--configfile", default="config/case3.yaml")
+    parser.add_argument("--scenario", default="mc",
+                        help="the design's scenario (results/<case>/study/design/<scenario>.parquet)")
     parser.add_argument("--margin", type=float, default=20.0)
     parser.add_argument("--samples", type=int, default=8)
     parser.add_argument("--first", type=int, default=1,
@@ -65,7 +69,7 @@ def main() -> None:
 
     coupled.integrate = timed_integrate
 
-    _, design_rows, kwargs = mc_sample_inputs(args.root, args.configfile)
+    _, design_rows, kwargs = study_sample_inputs(args.root, args.configfile, args.scenario)
     variants = {"whole track": copy.deepcopy(kwargs), f"window {args.margin:g} m": copy.deepcopy(kwargs)}
     variants["whole track"]["sim"].pop("track_window_m", None)
     variants[f"window {args.margin:g} m"]["sim"]["track_window_m"] = float(args.margin)
@@ -82,7 +86,7 @@ def main() -> None:
             histories[name].append(history)
     names = list(variants)
     base, other = names
-    print(f"{args.root / args.configfile}: {len(rows)} Monte Carlo samples (design rows "
+    print(f"{args.root / args.configfile}: {len(rows)} samples of scenario {args.scenario} (design rows "
           f"{args.first}-{args.first + len(rows) - 1}), {steps[-1]} steps each")
     for name in names:
         median = float(np.median(per_step[name]))
