@@ -1,5 +1,5 @@
 """Shared set-up of the benchmarks that run a study's samples outside Snakemake
-(imported as a sibling module: benchmarks/study_sample_stages.py, benchmarks/track_window_study.py)."""
+(imported as a sibling module: benchmarks/study_sample_stages.py, benchmarks/study_variants.py)."""
 
 from __future__ import annotations
 
