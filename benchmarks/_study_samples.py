@@ -14,11 +14,13 @@ def study_sample_inputs(root: Path, configfile: str = "config/case3.yaml", scena
                      ) -> tuple[dict[str, Any], list[dict[str, Any]], dict[str, Any]]:
     """(configuration, design rows of ``scenario`` by sample index, `run_sample` keyword
     arguments) of the study `snakemake --configfile <configfile>` wrote in the clone ``root``:
-    the configuration merged as Snakemake merges it and the span frequencies, as a batch reads
-    them. The Monte Carlo irregularity scenario (``mc``, paper case 3) also gets the pooled
-    population where the workflow wrote it (else the campaigns' PSD tables); the fields
-    scenarios (``C1`` .. ``C4``, ``C4_mc``, paper case 2) run on the study's single
-    mean-spectrum irregularity and read no profiles, as in workflow/scripts/simulate_batch.py."""
+    the configuration merged as Snakemake merges it, the span frequencies and the profiles the
+    scenario's kind reads, as workflow/scripts/simulate_batch.py gives them to a batch: the
+    Monte Carlo irregularity scenario (``mc``, paper case 3) the pooled population where the
+    workflow wrote it (else the campaigns' PSD tables), a forecast scenario (paper case 4) the
+    forecast profiles, a TIPM scenario the latest campaign's representative profiles; the
+    fields scenarios (``C1`` .. ``C4``, ``C4_mc``, paper case 2) run on the study's single
+    mean-spectrum irregularity and read none."""
     from ttbpipe.io import read_table
     from ttbpipe.study.batch import _sample_kwargs
     from ttbpipe.study.plan import mc_profile_settings
@@ -27,8 +29,13 @@ def study_sample_inputs(root: Path, configfile: str = "config/case3.yaml", scena
     update_config(config, yaml.safe_load((root / configfile).read_text()))
     results = root / config["results_dir"]
     design = read_table(results / f"study/design/{scenario}.parquet")
+    kind = str(design["kind"].iloc[0])
     profiles: dict[str, Any] = {}
-    if scenario == "mc":
+    if kind == "forecast":
+        profiles = {kind: str(results / "tipm/forecast_profiles.parquet")}
+    elif kind == "irregularity":   # the latest campaign's representative profiles
+        profiles = {kind: str(max((results / "tipm/profiles").glob("*.parquet")))}
+    elif kind == "irregularity_mc":
         paths = sorted(str(p) for p in (results / "psd").glob("*.parquet"))
         population = {**mc_profile_settings(config), "date": max(Path(p).stem for p in paths)}
         pooled = results / "study/mc_population.parquet"

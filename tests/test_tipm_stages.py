@@ -83,6 +83,37 @@ def test_profiles_are_seeded_by_study_seed_date_and_index(psd_files):
     assert np.array_equal(alone["vertical_mm"].to_numpy(), one)
 
 
+def test_profiles_table_is_read_profile_by_profile(psd_files, tmp_path):
+    """write_profiles puts PROFILES_PER_ROW_GROUP whole profiles in each row group (their id
+    range in the group's statistics), and a study sample's read_profile gets its profile bit
+    for bit as the table in memory has it; an unsorted table is refused."""
+    import pyarrow.parquet as pq
+
+    from ttbpipe.study.samples import PROFILE_CHANNELS, read_profile
+    from ttbpipe.tipm.profiles import PROFILES_PER_ROW_GROUP, write_profiles
+
+    selection, weights, _ = select_stage(psd_files[:2], TIPM_CFG, PSD_CFG)
+    profiles = profiles_stage(selection, weights, DATES[1], TIPM_CFG, PSD_CFG, study_seed=7)
+    ids = np.unique(profiles["sample_index"])
+    assert ids.size > PROFILES_PER_ROW_GROUP   # more than one row group
+    path = write_profiles(profiles, tmp_path / "profiles.parquet", id_column="sample_index",
+                          kind="tipm_profiles")
+    meta = pq.ParquetFile(path).metadata
+    assert meta.num_row_groups == -(-ids.size // PROFILES_PER_ROW_GROUP)
+    column = meta.schema.to_arrow_schema().get_field_index("sample_index")
+    for g in range(meta.num_row_groups):
+        stats = meta.row_group(g).column(column).statistics
+        in_group = ids[g * PROFILES_PER_ROW_GROUP:(g + 1) * PROFILES_PER_ROW_GROUP]
+        assert (stats.min, stats.max) == (in_group[0], in_group[-1])
+    for sample in ids[::-1]:
+        expected = profiles[profiles["sample_index"] == sample][["chainage_m", *PROFILE_CHANNELS]]
+        pd.testing.assert_frame_equal(read_profile(str(path), "sample_index", int(sample)),
+                                      expected.reset_index(drop=True), check_exact=True)
+    with pytest.raises(ValueError, match="not sorted by sample_index"):
+        write_profiles(profiles.iloc[::-1], tmp_path / "unsorted.parquet",
+                       id_column="sample_index", kind="tipm_profiles")
+
+
 def test_evolution_forecast_and_validation_run_end_to_end(psd_files):
     table, meta = evolution_stage(psd_files, TIPM_CFG, PSD_CFG)
     model = SpectralEvolution.from_table(table, meta)
