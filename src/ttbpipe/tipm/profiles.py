@@ -41,8 +41,9 @@ STREAM_MONTE_CARLO = streams.TIPM_MONTE_CARLO
 #: reads its one profile with a filter on the id column
 #: (:func:`ttbpipe.study.samples.read_profile`); the row groups' statistics then skip every group
 #: but the one that holds it. Written in pyarrow's default groups of about a million rows, a
-#: table of 300 forecast profiles (1.2 million rows, 42 MB) cost every sample 60 ms; in groups of
-#: four profiles 2.4 ms (docs/performance.md, "The work around each run").
+#: table of 300 forecast profiles (1.2 million rows, 42 MB) cost a sample of a batch 34-73 ms;
+#: in groups of four profiles 7 ms (docs/performance.md, "A sample's profile read from its own
+#: row group").
 PROFILES_PER_ROW_GROUP = 4
 
 
