@@ -136,7 +136,9 @@ def _dense_triple_forces(packed, disp, vel):
 
 def test_triple_kernel_skips_only_zero_coefficients(model):
     """The CA mortar's triples read in groups (vertical only, lateral and roll only, general;
-    ``group_triple_entries``) give the dense evaluation's forces bit for bit; with entries in
+    ``group_triple_entries``) and in runs of three over the same DOFs give the dense
+    evaluation's forces bit for bit, and the runs give the one-by-one evaluation's bit for bit
+    over any ranges of triples (a moving window's); with entries in
     the general group (coefficients made non-zero at random) equal to rounding (1e-12 of the
     largest force), as the terms of a sum are then added in another order."""
     from ttbpipe.structure.kernels import _EVERY_ELEMENT, _triple_forces, group_triple_entries
@@ -149,13 +151,25 @@ def test_triple_kernel_skips_only_zero_coefficients(model):
     force = np.zeros(packed.n_dof)
     _triple_forces(packed, u, v, force, _EVERY_ELEMENT, 1)
     assert np.array_equal(force, _dense_triple_forces(packed, u, v))
+    # runs of three over the same DOFs evaluated together (tri_run_of_three), bit for bit as
+    # one by one, also where a moving window's ranges start or end inside a run
+    runs = np.flatnonzero(packed.tri_run_of_three)
+    assert runs.size > 0 and np.all(np.diff(runs) >= 3)
+    one_by_one = packed._replace(tri_run_of_three=np.zeros(0, dtype=np.uint8))
+    cut = np.array([[runs[0] + 1, runs[1] + 2], [runs[2], runs[-1] + 3], [0, 0]], dtype=np.int64)
+    for ranges, n_ranges in ((_EVERY_ELEMENT, 1), (cut, 2)):
+        force, ref = np.zeros(packed.n_dof), np.zeros(packed.n_dof)
+        _triple_forces(packed, u, v, force, ranges, n_ranges)
+        _triple_forces(one_by_one, u, v, ref, ranges, n_ranges)
+        assert np.array_equal(force, ref) and np.abs(ref).max() > 0
 
     mixed = coef.copy()
     fill = rng.random(mixed.shape) < 0.2
     mixed[fill] = rng.normal(size=fill.sum())
-    group_end, kdof, kcoef = group_triple_entries(packed.tri_ptr, packed.tri_dof, mixed.ravel())
+    group_end, kdof, kcoef, runs = group_triple_entries(packed.tri_ptr, packed.tri_dof,
+                                                        mixed.ravel())
     general = packed._replace(tri_coef=mixed.ravel(), tri_group_end=group_end,
-                              tri_kernel_dof=kdof, tri_kernel_coef=kcoef)
+                              tri_kernel_dof=kdof, tri_kernel_coef=kcoef, tri_run_of_three=runs)
     assert (group_end[1::2] < packed.tri_ptr[1:]).any()        # the general group is used
     force = np.zeros(packed.n_dof)
     _triple_forces(general, u, v, force, _EVERY_ELEMENT, 1)

@@ -526,7 +526,8 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         Kf.append(red.K.ravel()); Cf.append(red.C.ravel()); Mi.append(minv.ravel())
     ptr, ldof, lcoef, lk, lc = links.arrays()
     tptr, tdof, tcoef, tk, tc = links.triple_arrays()
-    tri_group_end, tri_kernel_dof, tri_kernel_coef = group_triple_entries(tptr, tdof, tcoef)
+    tri_group_end, tri_kernel_dof, tri_kernel_coef, tri_run_of_three = group_triple_entries(
+        tptr, tdof, tcoef)
     pad_all = pads["slab"] + pads["ballasted"] + pads["rigid"]
     pad_int = lambda col: np.array([q[col] for q in pad_all], dtype=np.int64)  # noqa: E731
     pad_flt = lambda col: (np.array([q[col] for q in pad_all], dtype=float).ravel()  # noqa: E731
@@ -560,6 +561,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         bal_half_gauge=half_gauge,
         tri_group_end=tri_group_end, tri_kernel_dof=tri_kernel_dof,
         tri_kernel_coef=tri_kernel_coef,
+        tri_run_of_three=tri_run_of_three,
     )
     info = dict(off, n_diag=n_diag, n_dof=n_dof, span_dof0=span_dof0, n_piers=n_piers,
                 pier_top_dof0=pier_top_dof0, block_dof0=block_dof0,

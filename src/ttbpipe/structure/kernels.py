@@ -38,7 +38,7 @@ StructurePacked = namedtuple("StructurePacked", [
     "pad_rail", "pad_seat_a", "pad_seat_b", "pad_geom", "pad_k", "pad_c", "pad_group",
     "pad_foot_depth", "pad_seat_half_thickness",
     "bal_sleeper", "bal_block", "bal_next", "bal_k", "bal_c", "bal_half_gauge",
-    "tri_group_end", "tri_kernel_dof", "tri_kernel_coef",
+    "tri_group_end", "tri_kernel_dof", "tri_kernel_coef", "tri_run_of_three",
 ])
 # Link triples, rail pads and ballast default to none, so that a structure without them (a bare
 # girder, rails on rigid ground) is built by keyword without listing them.
@@ -49,7 +49,8 @@ StructurePacked.__new__.__defaults__ = (
     np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(3, dtype=np.int64), 0.0, 0.0,
     np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
     np.zeros(4), np.zeros(4), 0.0,
-    np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
+    np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0),
+    np.zeros(0, dtype=np.uint8))
 
 
 # Element indices are unsigned in the element loops: numba then drops the negative-index
@@ -176,7 +177,7 @@ def _link_forces(packed, disp, vel, force, ranges, n_ranges):
 
 def group_triple_entries(tri_ptr, tri_dof, tri_coef):
     """The link triples' entries reordered for :func:`_triple_forces`: returns
-    (``tri_group_end``, ``tri_kernel_dof``, ``tri_kernel_coef``).
+    (``tri_group_end``, ``tri_kernel_dof``, ``tri_kernel_coef``, ``tri_run_of_three``).
 
     Within each triple the entries (DOF, three coefficients) are put in three groups, each in
     its original order: those acting on the vertical link only (c1 = c2 = 0), those on the
@@ -185,7 +186,8 @@ def group_triple_entries(tri_ptr, tri_dof, tri_coef):
     ``tri_ptr[t + 1]``). Two thirds of the CA mortar's coefficients are zero (a quadrature
     point's vertical link has no lateral DOF in it, and the other way round); the kernel skips
     them. ``tri_dof`` and ``tri_coef`` keep their order (the assembled matrices and the moving
-    window read them).
+    window read them). ``tri_run_of_three`` marks the runs of three triples over the same
+    grouped DOFs (:func:`triple_runs_of_three`), which the kernel evaluates together.
     """
     n_tri = tri_ptr.shape[0] - 1
     coef = np.asarray(tri_coef, dtype=float).reshape(-1, 3)
@@ -201,7 +203,38 @@ def group_triple_entries(tri_ptr, tri_dof, tri_coef):
         order[j0:j1] = np.concatenate([entries[vertical], entries[lateral_roll], entries[rest]])
         group_end[2 * t] = j0 + int(vertical.sum())
         group_end[2 * t + 1] = group_end[2 * t] + int(lateral_roll.sum())
-    return group_end, np.ascontiguousarray(tri_dof[order]), np.ascontiguousarray(coef[order].ravel())
+    kernel_dof = np.ascontiguousarray(tri_dof[order])
+    return (group_end, kernel_dof, np.ascontiguousarray(coef[order].ravel()),
+            triple_runs_of_three(tri_ptr, group_end, kernel_dof))
+
+
+def triple_runs_of_three(tri_ptr, group_end, kernel_dof):
+    """1 at the first triple of each run of three consecutive link triples that
+    :func:`_triple_forces` evaluates together (``tri_run_of_three``), else 0: the three have the
+    same entries' DOFs in the same groups (a CA slab element's three quadrature points over its
+    own and its girder's DOFs), only a vertical and a lateral-roll group, and no DOF in both.
+    The kernel then reads each DOF's index, displacement, velocity and force once for the three
+    (docs/performance.md, "The CA triples in runs of three")."""
+    n_tri = tri_ptr.shape[0] - 1
+    runs = np.zeros(n_tri, dtype=np.uint8)
+
+    def layout(t):
+        j0, j1 = int(tri_ptr[t]), int(tri_ptr[t + 1])
+        return (int(group_end[2 * t]) - j0, int(group_end[2 * t + 1]) - j0, j1 - j0,
+                kernel_dof[j0:j1])
+
+    t = 0
+    while t + 2 < n_tri:
+        n_vertical, n_two_groups, n_all, dofs = layout(t)
+        if (n_two_groups == n_all
+                and not np.intersect1d(dofs[:n_vertical], dofs[n_vertical:]).size
+                and all(layout(u)[:3] == (n_vertical, n_two_groups, n_all)
+                        and np.array_equal(layout(u)[3], dofs) for u in (t + 1, t + 2))):
+            runs[t] = 1
+            t += 3
+        else:
+            t += 1
+    return runs
 
 
 # The two group sums are inlined into _triple_forces: called as functions, once or twice per
@@ -233,6 +266,110 @@ def _lateral_roll_sums(dofs, coef, disp, vel, j0, j1, d1, d2, v1, v2):
     return d1, d2, v1, v2
 
 
+@kernel(inline="always")
+def _triple_forces_one(packed, dofs, coef, disp, vel, force, t):
+    """Subtract the forces of link triple ``t`` (:func:`_triple_forces`)."""
+    j0 = packed.tri_ptr[t]
+    j_lat = packed.tri_group_end[_TWO * t]
+    j_gen = packed.tri_group_end[_TWO * t + _ONE]
+    j1 = packed.tri_ptr[t + _ONE]
+    t3 = _THREE * t
+    d0, v0 = _vertical_sums(dofs, coef, disp, vel, j0, j_lat, 0.0, 0.0)
+    d1, d2, v1, v2 = _lateral_roll_sums(dofs, coef, disp, vel, j_lat, j_gen,
+                                        0.0, 0.0, 0.0, 0.0)
+    # the general group: each link's terms in the entries' order, as in the groups
+    d0, v0 = _vertical_sums(dofs, coef, disp, vel, j_gen, j1, d0, v0)
+    d1, d2, v1, v2 = _lateral_roll_sums(dofs, coef, disp, vel, j_gen, j1, d1, d2, v1, v2)
+    p0 = packed.tri_k[t3] * d0 + packed.tri_c[t3] * v0
+    p1 = packed.tri_k[t3 + _ONE] * d1 + packed.tri_c[t3 + _ONE] * v1
+    p2 = packed.tri_k[t3 + _TWO] * d2 + packed.tri_c[t3 + _TWO] * v2
+    for j in range(j0, j_lat):
+        force[dofs[j]] -= coef[3 * j] * p0
+    for j in range(j_lat, j_gen):
+        force[dofs[j]] -= coef[3 * j + 1] * p1 + coef[3 * j + 2] * p2
+    for j in range(j_gen, j1):
+        force[dofs[j]] -= coef[3 * j] * p0 + coef[3 * j + 1] * p1 + coef[3 * j + 2] * p2
+
+
+@kernel(inline="always")
+def _triple_forces_three(packed, dofs, coef, disp, vel, force, t):
+    """Subtract the forces of link triples ``t``, ``t + 1``, ``t + 2``, a run of three over
+    the same DOFs (:func:`triple_runs_of_three`): each DOF's index, displacement, velocity and
+    force read once for the three. Every sum takes the same terms in the same order as
+    :func:`_triple_forces_one` three times: a DOF's force has the three triples' terms
+    subtracted in the triples' order, as there, since no other triple comes between them."""
+    a = packed.tri_ptr[t]
+    b = packed.tri_ptr[t + _ONE]
+    c = packed.tri_ptr[t + _TWO]
+    n_vertical = packed.tri_group_end[_TWO * t] - a
+    n_all = packed.tri_group_end[_TWO * t + _ONE] - a
+    d0a = v0a = d0b = v0b = d0c = v0c = 0.0
+    for i in range(n_vertical):
+        q = dofs[a + i]
+        u = disp[q]
+        w = vel[q]
+        ca = coef[3 * (a + i)]
+        cb = coef[3 * (b + i)]
+        cc = coef[3 * (c + i)]
+        d0a += ca * u
+        v0a += ca * w
+        d0b += cb * u
+        v0b += cb * w
+        d0c += cc * u
+        v0c += cc * w
+    d1a = d2a = v1a = v2a = d1b = d2b = v1b = v2b = d1c = d2c = v1c = v2c = 0.0
+    for i in range(n_vertical, n_all):
+        q = dofs[a + i]
+        u = disp[q]
+        w = vel[q]
+        c1 = coef[3 * (a + i) + 1]
+        c2 = coef[3 * (a + i) + 2]
+        d1a += c1 * u
+        d2a += c2 * u
+        v1a += c1 * w
+        v2a += c2 * w
+        c1 = coef[3 * (b + i) + 1]
+        c2 = coef[3 * (b + i) + 2]
+        d1b += c1 * u
+        d2b += c2 * u
+        v1b += c1 * w
+        v2b += c2 * w
+        c1 = coef[3 * (c + i) + 1]
+        c2 = coef[3 * (c + i) + 2]
+        d1c += c1 * u
+        d2c += c2 * u
+        v1c += c1 * w
+        v2c += c2 * w
+    k = packed.tri_k
+    damping = packed.tri_c
+    ta = _THREE * t
+    tb = ta + _THREE
+    tc = tb + _THREE
+    p0a = k[ta] * d0a + damping[ta] * v0a
+    p1a = k[ta + _ONE] * d1a + damping[ta + _ONE] * v1a
+    p2a = k[ta + _TWO] * d2a + damping[ta + _TWO] * v2a
+    p0b = k[tb] * d0b + damping[tb] * v0b
+    p1b = k[tb + _ONE] * d1b + damping[tb + _ONE] * v1b
+    p2b = k[tb + _TWO] * d2b + damping[tb + _TWO] * v2b
+    p0c = k[tc] * d0c + damping[tc] * v0c
+    p1c = k[tc + _ONE] * d1c + damping[tc + _ONE] * v1c
+    p2c = k[tc + _TWO] * d2c + damping[tc + _TWO] * v2c
+    for i in range(n_vertical):
+        q = dofs[a + i]
+        f = force[q]
+        f -= coef[3 * (a + i)] * p0a
+        f -= coef[3 * (b + i)] * p0b
+        f -= coef[3 * (c + i)] * p0c
+        force[q] = f
+    for i in range(n_vertical, n_all):
+        q = dofs[a + i]
+        f = force[q]
+        f -= coef[3 * (a + i) + 1] * p1a + coef[3 * (a + i) + 2] * p2a
+        f -= coef[3 * (b + i) + 1] * p1b + coef[3 * (b + i) + 2] * p2b
+        f -= coef[3 * (c + i) + 1] * p1c + coef[3 * (c + i) + 2] * p2c
+        force[q] = f
+
+
 @kernel(creates_arrays=False)
 def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
     """Subtract the forces of every link triple (CA quadrature points; rail pads and ballast have
@@ -247,35 +384,24 @@ def _triple_forces(packed, disp, vel, force, ranges, n_ranges):
     coefficients are used: a term with a zero coefficient adds nothing to a sum, so each d_r
     and each DOF's force are the same numbers as over the whole dense list (bit for bit when
     no entry of the third group shares a link with the first two, as in the CA mortar; else
-    equal to rounding, the terms of d_r summed in another order).
+    equal to rounding, the terms of d_r summed in another order). Runs of three triples over
+    the same DOFs (``tri_run_of_three``) are evaluated together, bit for bit as one by one.
     """
     n_tri = packed.tri_k.shape[0] // 3
-    group_end = packed.tri_group_end
+    runs = packed.tri_run_of_three
+    n_marked = np.uint64(runs.shape[0])
     dofs = packed.tri_kernel_dof
     coef = packed.tri_kernel_coef
     for k in range(n_ranges):
         t0, t1 = _element_span(ranges, k, n_tri)
-        for t in range(t0, t1):
-            j0 = packed.tri_ptr[t]
-            j_lat = group_end[_TWO * t]
-            j_gen = group_end[_TWO * t + _ONE]
-            j1 = packed.tri_ptr[t + _ONE]
-            t3 = _THREE * t
-            d0, v0 = _vertical_sums(dofs, coef, disp, vel, j0, j_lat, 0.0, 0.0)
-            d1, d2, v1, v2 = _lateral_roll_sums(dofs, coef, disp, vel, j_lat, j_gen,
-                                                0.0, 0.0, 0.0, 0.0)
-            # the general group: each link's terms in the entries' order, as in the groups
-            d0, v0 = _vertical_sums(dofs, coef, disp, vel, j_gen, j1, d0, v0)
-            d1, d2, v1, v2 = _lateral_roll_sums(dofs, coef, disp, vel, j_gen, j1, d1, d2, v1, v2)
-            p0 = packed.tri_k[t3] * d0 + packed.tri_c[t3] * v0
-            p1 = packed.tri_k[t3 + _ONE] * d1 + packed.tri_c[t3 + _ONE] * v1
-            p2 = packed.tri_k[t3 + _TWO] * d2 + packed.tri_c[t3 + _TWO] * v2
-            for j in range(j0, j_lat):
-                force[dofs[j]] -= coef[3 * j] * p0
-            for j in range(j_lat, j_gen):
-                force[dofs[j]] -= coef[3 * j + 1] * p1 + coef[3 * j + 2] * p2
-            for j in range(j_gen, j1):
-                force[dofs[j]] -= coef[3 * j] * p0 + coef[3 * j + 1] * p1 + coef[3 * j + 2] * p2
+        t = t0
+        while t < t1:
+            if t < n_marked and runs[t] != 0 and t + _TWO < t1:
+                _triple_forces_three(packed, dofs, coef, disp, vel, force, t)
+                t += _THREE
+            else:
+                _triple_forces_one(packed, dofs, coef, disp, vel, force, t)
+                t += _ONE
 
 
 @kernel(inline="always")
