@@ -240,14 +240,27 @@ def triple_runs_of_three(tri_ptr, group_end, kernel_dof):
 # The two group sums are inlined into _triple_forces: called as functions, once or twice per
 # triple, they cost the structure kernel 14 % (docs/performance.md, "Side by side in run_all.py").
 @kernel(inline="always")
+def _vertical_terms(coef, j, u, w, d0, v0):
+    """(d0, v0) plus entry j's vertical term at displacement u, velocity w."""
+    c0 = coef[3 * j]
+    return d0 + c0 * u, v0 + c0 * w
+
+
+@kernel(inline="always")
 def _vertical_sums(dofs, coef, disp, vel, j0, j1, d0, v0):
     """(d0, v0) plus the vertical link's terms of entries [j0, j1) of a link triple."""
     for j in range(j0, j1):
         q = dofs[j]
-        c0 = coef[3 * j]
-        d0 += c0 * disp[q]
-        v0 += c0 * vel[q]
+        d0, v0 = _vertical_terms(coef, j, disp[q], vel[q], d0, v0)
     return d0, v0
+
+
+@kernel(inline="always")
+def _lateral_roll_terms(coef, j, u, w, d1, d2, v1, v2):
+    """(d1, d2, v1, v2) plus entry j's lateral and roll terms at displacement u, velocity w."""
+    c1 = coef[3 * j + 1]
+    c2 = coef[3 * j + 2]
+    return d1 + c1 * u, d2 + c2 * u, v1 + c1 * w, v2 + c2 * w
 
 
 @kernel(inline="always")
@@ -255,15 +268,16 @@ def _lateral_roll_sums(dofs, coef, disp, vel, j0, j1, d1, d2, v1, v2):
     """(d1, d2, v1, v2) plus the lateral and roll links' terms of entries [j0, j1)."""
     for j in range(j0, j1):
         q = dofs[j]
-        u = disp[q]
-        w = vel[q]
-        c1 = coef[3 * j + 1]
-        c2 = coef[3 * j + 2]
-        d1 += c1 * u
-        d2 += c2 * u
-        v1 += c1 * w
-        v2 += c2 * w
+        d1, d2, v1, v2 = _lateral_roll_terms(coef, j, disp[q], vel[q], d1, d2, v1, v2)
     return d1, d2, v1, v2
+
+
+@kernel(inline="always")
+def _triple_link_forces(packed, t3, d0, d1, d2, v0, v1, v2):
+    """(p0, p1, p2) = k d + c d' of the three links of the triple whose first link is ``t3``."""
+    return (packed.tri_k[t3] * d0 + packed.tri_c[t3] * v0,
+            packed.tri_k[t3 + _ONE] * d1 + packed.tri_c[t3 + _ONE] * v1,
+            packed.tri_k[t3 + _TWO] * d2 + packed.tri_c[t3 + _TWO] * v2)
 
 
 @kernel(inline="always")
@@ -280,9 +294,7 @@ def _triple_forces_one(packed, dofs, coef, disp, vel, force, t):
     # the general group: each link's terms in the entries' order, as in the groups
     d0, v0 = _vertical_sums(dofs, coef, disp, vel, j_gen, j1, d0, v0)
     d1, d2, v1, v2 = _lateral_roll_sums(dofs, coef, disp, vel, j_gen, j1, d1, d2, v1, v2)
-    p0 = packed.tri_k[t3] * d0 + packed.tri_c[t3] * v0
-    p1 = packed.tri_k[t3 + _ONE] * d1 + packed.tri_c[t3 + _ONE] * v1
-    p2 = packed.tri_k[t3 + _TWO] * d2 + packed.tri_c[t3 + _TWO] * v2
+    p0, p1, p2 = _triple_link_forces(packed, t3, d0, d1, d2, v0, v1, v2)
     for j in range(j0, j_lat):
         force[dofs[j]] -= coef[3 * j] * p0
     for j in range(j_lat, j_gen):
@@ -308,52 +320,22 @@ def _triple_forces_three(packed, dofs, coef, disp, vel, force, t):
         q = dofs[a + i]
         u = disp[q]
         w = vel[q]
-        ca = coef[3 * (a + i)]
-        cb = coef[3 * (b + i)]
-        cc = coef[3 * (c + i)]
-        d0a += ca * u
-        v0a += ca * w
-        d0b += cb * u
-        v0b += cb * w
-        d0c += cc * u
-        v0c += cc * w
+        d0a, v0a = _vertical_terms(coef, a + i, u, w, d0a, v0a)
+        d0b, v0b = _vertical_terms(coef, b + i, u, w, d0b, v0b)
+        d0c, v0c = _vertical_terms(coef, c + i, u, w, d0c, v0c)
     d1a = d2a = v1a = v2a = d1b = d2b = v1b = v2b = d1c = d2c = v1c = v2c = 0.0
     for i in range(n_vertical, n_all):
         q = dofs[a + i]
         u = disp[q]
         w = vel[q]
-        c1 = coef[3 * (a + i) + 1]
-        c2 = coef[3 * (a + i) + 2]
-        d1a += c1 * u
-        d2a += c2 * u
-        v1a += c1 * w
-        v2a += c2 * w
-        c1 = coef[3 * (b + i) + 1]
-        c2 = coef[3 * (b + i) + 2]
-        d1b += c1 * u
-        d2b += c2 * u
-        v1b += c1 * w
-        v2b += c2 * w
-        c1 = coef[3 * (c + i) + 1]
-        c2 = coef[3 * (c + i) + 2]
-        d1c += c1 * u
-        d2c += c2 * u
-        v1c += c1 * w
-        v2c += c2 * w
-    k = packed.tri_k
-    damping = packed.tri_c
-    ta = _THREE * t
-    tb = ta + _THREE
-    tc = tb + _THREE
-    p0a = k[ta] * d0a + damping[ta] * v0a
-    p1a = k[ta + _ONE] * d1a + damping[ta + _ONE] * v1a
-    p2a = k[ta + _TWO] * d2a + damping[ta + _TWO] * v2a
-    p0b = k[tb] * d0b + damping[tb] * v0b
-    p1b = k[tb + _ONE] * d1b + damping[tb + _ONE] * v1b
-    p2b = k[tb + _TWO] * d2b + damping[tb + _TWO] * v2b
-    p0c = k[tc] * d0c + damping[tc] * v0c
-    p1c = k[tc + _ONE] * d1c + damping[tc + _ONE] * v1c
-    p2c = k[tc + _TWO] * d2c + damping[tc + _TWO] * v2c
+        d1a, d2a, v1a, v2a = _lateral_roll_terms(coef, a + i, u, w, d1a, d2a, v1a, v2a)
+        d1b, d2b, v1b, v2b = _lateral_roll_terms(coef, b + i, u, w, d1b, d2b, v1b, v2b)
+        d1c, d2c, v1c, v2c = _lateral_roll_terms(coef, c + i, u, w, d1c, d2c, v1c, v2c)
+    t3 = _THREE * t
+    p0a, p1a, p2a = _triple_link_forces(packed, t3, d0a, d1a, d2a, v0a, v1a, v2a)
+    p0b, p1b, p2b = _triple_link_forces(packed, t3 + _THREE, d0b, d1b, d2b, v0b, v1b, v2b)
+    p0c, p1c, p2c = _triple_link_forces(packed, t3 + _THREE + _THREE, d0c, d1c, d2c, v0c, v1c,
+                                        v2c)
     for i in range(n_vertical):
         q = dofs[a + i]
         f = force[q]
