@@ -3,7 +3,7 @@
 from ttbpipe.io import read_provenance, read_table, save_figure, write_table
 from ttbpipe.logs import setup_logging
 from ttbpipe.tipm.evolution import SpectralEvolution
-from ttbpipe.tipm.profiles import write_profiles
+from ttbpipe.tipm.profiles import PROFILE_ID_COLUMN, write_profiles
 from ttbpipe.tipm.plots import plot_forecast_spectra
 from ttbpipe.tipm.stages import forecast_base, forecast_stage
 from ttbpipe.workflow import snakemake_context
@@ -20,7 +20,7 @@ forecast, states, profiles = forecast_stage(model, base, snakemake.params.base_d
 extra = dict(config=snakemake.config, base_date=snakemake.params.base_date)
 write_table(forecast, snakemake.output.forecast, kind="tipm_forecast", **extra)
 write_table(states, snakemake.output.states, kind="tipm_forecast_states", **extra)
-write_profiles(profiles, snakemake.output.profiles, id_column="profile_index",
+write_profiles(profiles, snakemake.output.profiles, id_column=PROFILE_ID_COLUMN["forecast"],
                kind="tipm_forecast_profiles", **extra)
 save_figure(plot_forecast_spectra(forecast, base, snakemake.params.base_date),
             snakemake.output.figure)

@@ -3,7 +3,7 @@ and their profiles."""
 
 from ttbpipe.io import write_table
 from ttbpipe.logs import setup_logging
-from ttbpipe.tipm.profiles import write_profiles
+from ttbpipe.tipm.profiles import PROFILE_ID_COLUMN, write_profiles
 from ttbpipe.tipm.stages import profiles_stage, select_stage
 from ttbpipe.workflow import snakemake_context
 
@@ -18,5 +18,5 @@ extra = dict(config=snakemake.config, campaign_date=date, sources=sources)
 write_table(selection, snakemake.output.selection, kind="tipm_selection", **extra)
 write_table(weights, snakemake.output.weights, kind="tipm_weights", **extra)
 write_table(metrics, snakemake.output.metrics, kind="tipm_selection_metrics", **extra)
-write_profiles(profiles, snakemake.output.profiles, id_column="sample_index", kind="tipm_profiles",
+write_profiles(profiles, snakemake.output.profiles, id_column=PROFILE_ID_COLUMN["irregularity"], kind="tipm_profiles",
                weights_table=str(snakemake.output.weights), **extra)

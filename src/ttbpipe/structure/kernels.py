@@ -208,6 +208,11 @@ def group_triple_entries(tri_ptr, tri_dof, tri_coef):
             triple_runs_of_three(tri_ptr, group_end, kernel_dof))
 
 
+def _same_layout(a, b) -> bool:
+    """Two triples' (group sizes..., grouped DOFs) of :func:`triple_runs_of_three` equal."""
+    return a[:3] == b[:3] and np.array_equal(a[3], b[3])
+
+
 def triple_runs_of_three(tri_ptr, group_end, kernel_dof):
     """1 at the first triple of each run of three consecutive link triples that
     :func:`_triple_forces` evaluates together (``tri_run_of_three``), else 0: the three have the
@@ -225,11 +230,11 @@ def triple_runs_of_three(tri_ptr, group_end, kernel_dof):
 
     t = 0
     while t + 2 < n_tri:
-        n_vertical, n_two_groups, n_all, dofs = layout(t)
+        first = layout(t)
+        n_vertical, n_two_groups, n_all, dofs = first
         if (n_two_groups == n_all
                 and not np.intersect1d(dofs[:n_vertical], dofs[n_vertical:]).size
-                and all(layout(u)[:3] == (n_vertical, n_two_groups, n_all)
-                        and np.array_equal(layout(u)[3], dofs) for u in (t + 1, t + 2))):
+                and all(_same_layout(layout(u), first) for u in (t + 1, t + 2))):
             runs[t] = 1
             t += 3
         else:

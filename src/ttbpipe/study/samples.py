@@ -321,8 +321,9 @@ def run_sample(row: Mapping[str, Any], *, study_seed: int, sim: Mapping[str, Any
     if kind == "irregularity_mc":
         track = mc_profile(profiles[kind], study_seed, int(row["profile_index"]), index)
     elif kind in ("irregularity", "forecast"):
-        id_column = "sample_index" if kind == "irregularity" else "profile_index"
-        track = read_profile(profiles[kind], id_column, int(row["profile_index"]))
+        from ..tipm.profiles import PROFILE_ID_COLUMN
+
+        track = read_profile(profiles[kind], PROFILE_ID_COLUMN[kind], int(row["profile_index"]))
     elif kind not in ("fields", "fields_mc", "single"):
         raise ValueError(f"design row {row['scenario']}/{index}: unknown kind {kind!r}")
     if track is not None:

@@ -28,7 +28,7 @@ from .. import streams
 from ..irregularity.synthesis import DEFAULT_AMPLITUDES, synthesize_from_psd_table
 
 __all__ = ["profile_rng", "profiles_from_psd_sets", "write_profiles", "STREAM_REPRESENTATIVE",
-           "STREAM_FORECAST", "STREAM_MONTE_CARLO", "PROFILES_PER_ROW_GROUP"]
+           "STREAM_FORECAST", "STREAM_MONTE_CARLO", "PROFILES_PER_ROW_GROUP", "PROFILE_ID_COLUMN"]
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +45,11 @@ STREAM_MONTE_CARLO = streams.TIPM_MONTE_CARLO
 #: in groups of four profiles 7 ms (docs/performance.md, "A sample's profile read from its own
 #: row group").
 PROFILES_PER_ROW_GROUP = 4
+#: The id column of each profiles table, by the study scenario kind that reads it: the
+#: representative sets' profiles (rule tipm_select) by their set, the forecast profiles (rule
+#: tipm_forecast) by their profile; written by :func:`write_profiles`, read by
+#: :func:`ttbpipe.study.samples.read_profile`.
+PROFILE_ID_COLUMN = {"irregularity": "sample_index", "forecast": "profile_index"}
 
 
 def date_key(date: str) -> int:
