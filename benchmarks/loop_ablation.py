@@ -36,7 +36,7 @@ from ttbpipe.simulation.recorder import (record_step_channels, record_vehicle_ou
                                          record_wheel_output, record_wheel_step)
 from ttbpipe.structure.kernels import windowed_accelerations_in_place  # noqa: E402
 from ttbpipe.structure.monitors import record_monitors  # noqa: E402
-from ttbpipe.structure.window import no_window  # noqa: E402
+from ttbpipe.structure.window import clear_moving, no_window  # noqa: E402
 from ttbpipe.vehicle.contact import N_COLS  # noqa: E402
 from ttbpipe.vehicle.dynamics import _work  # noqa: E402
 from ttbpipe.vehicle.kernels import RAIL_KIN_COLS  # noqa: E402
@@ -65,10 +65,9 @@ def loop(state, placed, packed, window, mesh, monitors, train, dt, n_steps, out_
             psi = 0.0 if n == 0 else 0.5
             L._advance(q, v, a, a_prev, dt, psi)
             if mode != 4:
-                L._advance(disp, vel, acc, acc_prev, dt, psi)
+                L._advance_moving(window, disp, vel, acc, acc_prev, dt, psi)
             t = (n + 1) * dt
-            for i in range(acc.shape[0]):
-                acc[i] = 0.0
+            clear_moving(window, acc)
             L._move_window(t, state, placed, window)
             L._train_loads(t, state, placed, work, mesh, ws_x, rail_kin, 1.0)
             if mode != 1:

@@ -5,7 +5,10 @@
   evaluated, in the same order) and the frozen DOFs none (reference: the plain kernel with the
   frozen DOFs' rows set to zero, an obviously correct second evaluation);
 * bookkeeping: DOFs leaving the window stop (velocity and accelerations 0) and move again when
-  it reaches them; the bridge and monitored DOFs always move; bad margins are refused;
+  it reaches them; the bridge and monitored DOFs always move; bad margins are refused; the
+  moving DOFs' ranges are exactly the DOFs that move, and Zhai's update and the clearing of the
+  loads on them alone leave every array as the update and clearing of all DOFs do (frozen DOFs
+  hold zero velocity and accelerations);
 * coupled run: a two-car train over one span between 60 m ballasted approaches, window of 10 m
   against the whole track (the second method): wheel-force peaks and deck peaks within 1e-3 of
   the whole track's (measured 1e-5 to 1e-4 on the reference case, docs/performance.md); the
@@ -22,7 +25,9 @@ import pytest
 from ttbpipe.simulation.coupled import integrate, prepare, results_table
 from ttbpipe.structure import build_structure
 from ttbpipe.structure.kernels import structure_accelerations, windowed_accelerations_in_place
-from ttbpipe.structure.window import no_window, track_window, update_window
+from ttbpipe.structure.window import (DOF_RANGES, clear_moving, no_window, track_window,
+                                     update_window)
+from ttbpipe.timestepping.zhai import zhai_predict, zhai_predict_ranges
 
 LAYOUT = {"approach_length_m": 60.0, "spans_m": [32.0], "approach_track": "ballasted",
           "bridge_track": "slab"}
@@ -94,6 +99,48 @@ def test_the_window_follows_the_train_and_stops_what_it_leaves(model):
     assert moving2[(x_rail > 20.0) & (x_rail < 50.0)].all()
     # span blocks (girders) never stop
     assert (vel[model.packed.n_diag:] == 1.0).all()
+
+
+def _moving_from_ranges(window, n):
+    moving = np.zeros(n, dtype=bool)
+    for start, end in window.dof_ranges[:window.n_ranges[DOF_RANGES]]:
+        moving[start:n if end < 0 else end] = True
+    return moving
+
+
+@pytest.mark.parametrize("x_low, x_high", [(2.0, 30.0), (40.0, 85.0), (95.0, 140.0)])
+def test_zhai_update_and_clearing_of_the_moving_dofs_alone_equal_those_of_all(model, x_low,
+                                                                              x_high):
+    n, n_diag = model.n_dof, model.packed.n_diag
+    window = track_window(model, 10.0)
+    assert _moving_from_ranges(window, n).all()           # before the first update: all move
+    rng = np.random.default_rng(5)
+    u, v, a, a_prev = (rng.normal(size=n) for _ in range(4))
+    update_window(window, x_low, x_high, v, a, a_prev)
+    moving = _moving_from_ranges(window, n)
+    # the ranges hold exactly the DOFs that move: an active or always-moving segment's, and
+    # the span blocks' (the frozen ones: a zero inverse mass where the structure has none)
+    segment = window.dof_segment
+    expected = np.ones(n, dtype=bool)
+    expected[:n_diag] = (segment < 0) | (window.segment_on[np.maximum(segment, 0)] != 0)
+    assert np.array_equal(moving, expected)
+    assert 0 < (~moving).sum() and (window.inv_mass[:n_diag][~moving[:n_diag]] == 0).all()
+    assert (v[~moving] == 0).all() and (a[~moving] == 0).all() and (a_prev[~moving] == 0).all()
+    for psi in (0.0, 0.5):
+        full = [x.copy() for x in (u, v, a, a_prev)]
+        part = [x.copy() for x in (u, v, a, a_prev)]
+        zhai_predict(*full, 1.25e-4, psi, psi)
+        zhai_predict_ranges(*part, 1.25e-4, psi, psi, window.dof_ranges,
+                            window.n_ranges[DOF_RANGES])
+        for x, y in zip(full, part):
+            assert np.array_equal(x, y)
+    loads = rng.normal(size=n)
+    loads[~moving] = 0.0
+    clear_moving(window, loads)
+    assert (loads == 0).all()
+    everything = rng.normal(size=n)
+    clear_moving(no_window(model.packed), everything)
+    assert (everything == 0).all()
 
 
 def test_monitored_dofs_always_move_and_bad_margins_are_refused(model):

@@ -29,8 +29,8 @@ from ..jit import kernel
 from ..structure.kernels import structure_accelerations_in_place, windowed_accelerations_in_place
 from ..structure.monitors import no_monitors, record_monitors
 from ..structure.rail_mesh import add_rail_contact_load, add_rail_head_load, rail_point_kinematics
-from ..structure.window import no_window, track_window, update_window
-from ..timestepping.zhai import zhai_predict
+from ..structure.window import DOF_RANGES, clear_moving, no_window, track_window, update_window
+from ..timestepping.zhai import zhai_predict, zhai_predict_ranges
 from ..vehicle.dynamics import _work, vehicle_accelerations
 from ..vehicle.contact import N_COLS
 from ..vehicle.kernels import RAIL_KIN_COLS
@@ -184,8 +184,7 @@ def _evaluate(t, state, placed, work, packed, window, mesh, ws_x, rail_kin, cree
     velocities (``work.wheel``: the wheel table of this evaluation; :func:`_train_loads`), the
     track outside ``window`` frozen."""
     acc = state.acc
-    for i in range(acc.shape[0]):
-        acc[i] = 0.0
+    clear_moving(window, acc)
     _move_window(t, state, placed, window)
     _train_loads(t, state, placed, work, mesh, ws_x, rail_kin, creep_scale)
     windowed_accelerations_in_place(packed, window, state.disp, state.vel, acc)
@@ -197,6 +196,18 @@ def _advance(u, v, a, a_prev, dt, psi):
     and the previous step's accelerations; :func:`ttbpipe.timestepping.zhai.zhai_predict`),
     then this step's accelerations become the previous ones."""
     zhai_predict(u, v, a, a_prev, dt, psi, psi)
+
+
+@kernel(creates_arrays=False)
+def _advance_moving(window, u, v, a, a_prev, dt, psi):
+    """:func:`_advance` for the structure's DOFs that move in ``window`` (the frozen ones keep
+    zero velocity and accelerations, which the update would leave as they are). The whole
+    track takes the plain update: through the ranges' one row the step measured 2 % longer."""
+    if window.n_segments == 0:
+        zhai_predict(u, v, a, a_prev, dt, psi, psi)
+    else:
+        zhai_predict_ranges(u, v, a, a_prev, dt, psi, psi, window.dof_ranges,
+                            window.n_ranges[DOF_RANGES])
 
 
 @kernel
@@ -226,7 +237,7 @@ def _coupled_loop(state, placed, packed, window, mesh, monitors, train, dt, n_st
         if n >= 0:
             psi = 0.0 if n == 0 else 0.5
             _advance(q, v, a, a_prev, dt, psi)
-            _advance(disp, vel, acc, acc_prev, dt, psi)
+            _advance_moving(window, disp, vel, acc, acc_prev, dt, psi)
             _evaluate((n + 1) * dt, state, placed, work, packed, window, mesh, ws_x, rail_kin,
                       1.0)
         step = n + 1

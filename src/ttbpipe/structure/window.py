@@ -39,14 +39,22 @@ DEFAULT_TRACK_WINDOW_M = None
 #: of the last update), each diagonal DOF's segment (-1: always moves), the structure's
 #: inverse mass and the working copy with the frozen DOFs at 0, each element's lowest segment
 #: (-1: always evaluated), and the evaluated elements as ranges (``*_ranges`` rows [start,
-#: end), ``n_ranges`` rows of beams, links, pads, ballast, link triples), which the kernels
-#: loop over (:func:`ttbpipe.structure.kernels.windowed_accelerations_in_place`).
+#: end), ``n_ranges`` rows of beams, links, pads, ballast, link triples, then of
+#: ``dof_ranges``), which the kernels loop over
+#: (:func:`ttbpipe.structure.kernels.windowed_accelerations_in_place`). ``dof_ranges``: the
+#: DOFs that move (the others keep zero velocity and accelerations, so the loop's Zhai update
+#: and its clearing of the loads skip them; :func:`ttbpipe.timestepping.zhai.zhai_predict_ranges`).
 TrackWindow = namedtuple("TrackWindow", [
     "n_segments", "segment_m", "margin_m", "segment_always", "segment_on", "active",
     "dof_segment", "base_inv_mass", "inv_mass",
     "beam_segment", "link_segment", "pad_segment", "ballast_segment", "triple_segment",
     "beam_ranges", "link_ranges", "pad_ranges", "ballast_ranges", "triple_ranges", "n_ranges",
+    "dof_ranges",
 ])
+#: Kinds of ranges of a window, the rows of ``n_ranges``: elements (beams, links, pads,
+#: ballast, link triples), then the moving DOFs.
+N_RANGE_KINDS = 6
+DOF_RANGES = 5
 
 
 def _every(n_rows: int = 1) -> np.ndarray:
@@ -62,7 +70,7 @@ def no_window(packed) -> TrackWindow:
     return TrackWindow(0, SEGMENT_M, np.inf, u0, u0.copy(), np.zeros(2, np.int64), i0,
                        packed.inv_mass, packed.inv_mass, i0, i0, i0, i0, i0,
                        _every(), _every(), _every(), _every(), _every(),
-                       np.ones(5, dtype=np.int64))
+                       np.ones(N_RANGE_KINDS, dtype=np.int64), _every())
 
 
 def _dof_x(model) -> np.ndarray:
@@ -149,11 +157,13 @@ def track_window(model, margin_m: float, keep_dofs=()) -> TrackWindow:
     bal_dofs = np.column_stack([packed.bal_sleeper, packed.bal_block, nxt]).ravel()
     bal_seg = _element_segments(np.arange(0, 3 * ns + 1, 3), bal_dofs, dof_segment, "sleeper")
     segments = (beam_seg, link_seg, pad_seg, bal_seg, tri_seg)
-    # until the first update every element is evaluated (row 0: [0, -1))
+    # until the first update every element is evaluated and every DOF moves (row 0: [0, -1))
     return TrackWindow(n_seg, SEGMENT_M, margin_m, always, always.copy(),
                        np.array([-1, -1], np.int64), dof_segment, packed.inv_mass,
                        packed.inv_mass.copy(), *segments,
-                       *(_every(e.size // 2 + 2) for e in segments), np.ones(5, dtype=np.int64))
+                       *(_every(e.size // 2 + 2) for e in segments),
+                       np.ones(N_RANGE_KINDS, dtype=np.int64),
+                       _every(dof_segment.size // 2 + 2))
 
 
 @kernel(creates_arrays=False)
@@ -176,6 +186,50 @@ def _element_ranges(segment, segment_on, ranges):
             inside = False
     if inside:
         ranges[rows, 1] = segment.shape[0]
+        rows += 1
+    return rows
+
+
+@kernel(creates_arrays=False)
+def clear_moving(window, values):
+    """Set the entries of the DOFs that move (``window.dof_ranges``) to 0: the coupled loop's
+    loads before each evaluation. The frozen DOFs' accelerations are 0 already: each
+    evaluation scales them by their zero inverse mass. Without a window, one plain loop over
+    all entries (the ranges' one row measured slower)."""
+    n = values.shape[0]
+    if window.n_segments == 0:
+        for i in range(n):
+            values[i] = 0.0
+        return
+    for k in range(window.n_ranges[DOF_RANGES]):
+        end = window.dof_ranges[k, 1]
+        for i in range(np.uint64(window.dof_ranges[k, 0]), np.uint64(end if end >= 0 else n)):
+            values[i] = 0.0
+
+
+@kernel(creates_arrays=False)
+def _moving_dof_ranges(dof_segment, segment_on, n_dof, ranges):
+    """The runs of DOFs that move as rows [start, end) of ``ranges``: a diagonal DOF whose
+    segment is active or that always moves, and every DOF after the diagonal ones (the span
+    blocks); returns the number of rows."""
+    n_diag = dof_segment.shape[0]
+    rows = 0
+    inside = False
+    for d in range(n_diag):
+        s = dof_segment[d]
+        moving = s < 0 or segment_on[s] != 0
+        if moving and not inside:
+            ranges[rows, 0] = d
+            inside = True
+        elif inside and not moving:
+            ranges[rows, 1] = d
+            rows += 1
+            inside = False
+    if n_dof > n_diag and not inside:
+        ranges[rows, 0] = n_diag
+        inside = True
+    if inside:
+        ranges[rows, 1] = n_dof
         rows += 1
     return rows
 
@@ -216,3 +270,4 @@ def update_window(window, x_low, x_high, vel, acc, acc_prev):
     n[2] = _element_ranges(window.pad_segment, on, window.pad_ranges)
     n[3] = _element_ranges(window.ballast_segment, on, window.ballast_ranges)
     n[4] = _element_ranges(window.triple_segment, on, window.triple_ranges)
+    n[DOF_RANGES] = _moving_dof_ranges(dof_segment, on, vel.shape[0], window.dof_ranges)

@@ -29,12 +29,33 @@ def zhai_predict(disp, vel, acc, acc_prev, dt, psi, phi):
     physics.md section 5). psi = phi = 0 on the first step, 1/2 afterwards. One pass over
     the arrays: the shift in a loop of its own cost the reference case's step 1-2 %.
     """
+    _zhai_predict_span(disp, vel, acc, acc_prev, dt, psi, phi, np.uint64(0),
+                       np.uint64(disp.shape[0]))
+
+
+@kernel(creates_arrays=False)
+def zhai_predict_ranges(disp, vel, acc, acc_prev, dt, psi, phi, ranges, n_ranges):
+    """:func:`zhai_predict` on the entries in the first ``n_ranges`` rows [start, end) of
+    ``ranges`` (end -1: to the last entry). The others must hold zero velocity and
+    accelerations (the frozen track of a moving window, :mod:`ttbpipe.structure.window`): the
+    update would leave them as they are."""
+    n = disp.shape[0]
+    for k in range(n_ranges):
+        end = ranges[k, 1]
+        _zhai_predict_span(disp, vel, acc, acc_prev, dt, psi, phi, np.uint64(ranges[k, 0]),
+                           np.uint64(end if end >= 0 else n))
+
+
+@kernel(inline="always")
+def _zhai_predict_span(disp, vel, acc, acc_prev, dt, psi, phi, i0, i1):
+    """:func:`zhai_predict` on entries [i0, i1) (unsigned: numba then drops the negative-index
+    test on every access, which would keep the loop from being vectorised)."""
     h2 = dt * dt
     ca = (0.5 + psi) * h2
     cp = psi * h2
     va = (1.0 + phi) * dt
     vp = phi * dt
-    for i in range(disp.shape[0]):
+    for i in range(i0, i1):
         a = acc[i]
         ap = acc_prev[i]
         disp[i] += vel[i] * dt + ca * a - cp * ap
