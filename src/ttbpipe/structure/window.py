@@ -166,6 +166,28 @@ def track_window(model, margin_m: float, keep_dofs=()) -> TrackWindow:
                        _every(dof_segment.size // 2 + 2))
 
 
+@kernel(inline="always")
+def _extend_runs(ranges, rows, inside, i, selected):
+    """One index of the runs of selected indices written as rows [start, end) of ``ranges``:
+    index ``i`` opens a run, closes the open one or neither; returns (rows, inside a run)."""
+    if selected and not inside:
+        ranges[rows, 0] = i
+        return rows, True
+    if inside and not selected:
+        ranges[rows, 1] = i
+        return rows + 1, False
+    return rows, inside
+
+
+@kernel(inline="always")
+def _close_runs(ranges, rows, inside, end):
+    """Close the open run at ``end``; returns the number of rows."""
+    if inside:
+        ranges[rows, 1] = end
+        return rows + 1
+    return rows
+
+
 @kernel(creates_arrays=False)
 def _element_ranges(segment, segment_on, ranges):
     """The runs of elements to evaluate as rows [start, end) of ``ranges`` (an element with a
@@ -177,17 +199,8 @@ def _element_ranges(segment, segment_on, ranges):
     for e in range(segment.shape[0]):
         s = segment[e]
         evaluated = s < 0 or segment_on[s] != 0 or (s + 1 < n and segment_on[s + 1] != 0)
-        if evaluated and not inside:
-            ranges[rows, 0] = e
-            inside = True
-        elif inside and not evaluated:
-            ranges[rows, 1] = e
-            rows += 1
-            inside = False
-    if inside:
-        ranges[rows, 1] = segment.shape[0]
-        rows += 1
-    return rows
+        rows, inside = _extend_runs(ranges, rows, inside, e, evaluated)
+    return _close_runs(ranges, rows, inside, segment.shape[0])
 
 
 @kernel(creates_arrays=False)
@@ -217,21 +230,10 @@ def _moving_dof_ranges(dof_segment, segment_on, n_dof, ranges):
     inside = False
     for d in range(n_diag):
         s = dof_segment[d]
-        moving = s < 0 or segment_on[s] != 0
-        if moving and not inside:
-            ranges[rows, 0] = d
-            inside = True
-        elif inside and not moving:
-            ranges[rows, 1] = d
-            rows += 1
-            inside = False
-    if n_dof > n_diag and not inside:
-        ranges[rows, 0] = n_diag
-        inside = True
-    if inside:
-        ranges[rows, 1] = n_dof
-        rows += 1
-    return rows
+        rows, inside = _extend_runs(ranges, rows, inside, d, s < 0 or segment_on[s] != 0)
+    if n_dof > n_diag:
+        rows, inside = _extend_runs(ranges, rows, inside, n_diag, True)
+    return _close_runs(ranges, rows, inside, n_dof)
 
 
 @kernel(creates_arrays=False)
