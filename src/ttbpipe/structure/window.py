@@ -43,7 +43,8 @@ DEFAULT_TRACK_WINDOW_M = None
 #: ``dof_ranges``), which the kernels loop over
 #: (:func:`ttbpipe.structure.kernels.windowed_accelerations_in_place`). ``dof_ranges``: the
 #: DOFs that move (the others keep zero velocity and accelerations, so the loop's Zhai update
-#: and its clearing of the loads skip them; :func:`ttbpipe.timestepping.zhai.zhai_predict_ranges`).
+#: and its clearing of the loads skip them: :func:`clear_moving`,
+#: :func:`ttbpipe.timestepping.zhai.zhai_predict_ranges`).
 TrackWindow = namedtuple("TrackWindow", [
     "n_segments", "segment_m", "margin_m", "segment_always", "segment_on", "active",
     "dof_segment", "base_inv_mass", "inv_mass",
