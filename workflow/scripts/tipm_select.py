@@ -18,5 +18,5 @@ extra = dict(config=snakemake.config, campaign_date=date, sources=sources)
 write_table(selection, snakemake.output.selection, kind="tipm_selection", **extra)
 write_table(weights, snakemake.output.weights, kind="tipm_weights", **extra)
 write_table(metrics, snakemake.output.metrics, kind="tipm_selection_metrics", **extra)
-write_profiles(profiles, snakemake.output.profiles, id_column=PROFILE_ID_COLUMN["irregularity"], kind="tipm_profiles",
-               weights_table=str(snakemake.output.weights), **extra)
+write_profiles(profiles, snakemake.output.profiles, id_column=PROFILE_ID_COLUMN["irregularity"],
+               kind="tipm_profiles", weights_table=str(snakemake.output.weights), **extra)

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 from ..jit import kernel
-from .kernels import _EVERY_ELEMENT
+from .kernels import _EVERY_ELEMENT, _element_span
 
 #: Segment length of the window's bookkeeping (m): a few fastener bays, longer than any element.
 SEGMENT_M = 5.0
@@ -216,8 +216,8 @@ def clear_moving(window, values):
             values[i] = 0.0
         return
     for k in range(window.n_ranges[DOF_RANGES]):
-        end = window.dof_ranges[k, 1]
-        for i in range(np.uint64(window.dof_ranges[k, 0]), np.uint64(end if end >= 0 else n)):
+        start, end = _element_span(window.dof_ranges, k, n)
+        for i in range(start, end):
             values[i] = 0.0
 
 
