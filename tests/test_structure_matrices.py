@@ -84,3 +84,70 @@ def test_the_comparison_sees_a_changed_entry():
     a = assemble_matrices(changed)[1]
     b = assemble_matrices_by_element(packed)[1]
     assert not np.array_equal(a.data, b.data)
+
+
+
+def _packed_arrays(model):
+    return {name: value for name, value in zip(model.packed._fields, model.packed)
+            if isinstance(value, np.ndarray)}
+
+
+def _structure_builder(variant):
+    """A function building one of the structures the at-once assemblies are checked on."""
+    cfg = copy.deepcopy(SMALL)
+    if variant == "curved_random":
+        case = yaml.safe_load((REPO / "config" / "curved_bridge.yaml").read_text())
+        nominal = nominal_structure(case)
+        assert nominal.cant is not None and nominal.plan is not None
+        factors = _random_factors(nominal, 11)
+        return lambda: apply_factors(nominal, factors)
+    if variant == "double_track":
+        cfg["layout"]["tracks"] = 2
+        return lambda: build_structure(cfg)
+    if variant == "discrete_slab_approaches_random":   # gaps: pads off every slab element
+        cfg["layout"]["approach_track"] = "slab"
+        cfg["slab"] = {"type": "discrete"}
+    elif variant == "rigid_approaches_random":
+        cfg["layout"]["approach_track"] = "rigid"
+    nominal = build_structure(cfg)
+    factors = _random_factors(nominal, 5)
+    return lambda: apply_factors(nominal, factors)
+
+
+@pytest.mark.parametrize("at_once,by_one", [("_ca_triples", "_ca_triples_by_point"),
+                                            ("_rail_pads", "_rail_pads_by_node")])
+@pytest.mark.parametrize("variant", ["discrete_slab_approaches_random", "rigid_approaches_random",
+                                     "double_track", "curved_random"])
+def test_assembly_at_once_equals_the_loop_one_by_one(at_once, by_one, variant, monkeypatch):
+    """`_ca_triples` builds the CA mortar and slab-foundation link triples of every quadrature
+    point at once, `_rail_pads` every rail pad at once; `_ca_triples_by_point` and
+    `_rail_pads_by_node` are the loops they replaced, one point or rail node at a time. The
+    structures they give hold the same arrays bit for bit (values, signs of zeros, order):
+    on discrete slab approaches (the foundation's coefficients; rail nodes in the gaps between
+    slab units, seated on the nearest element's end), on rigid approaches, each with a
+    bridge of random factors, on a double-track deck, and on the canted, curved reference
+    bridge (the deck rows rotated into the track plane, the centre line off the girder's axis)
+    with random factors."""
+    import ttbpipe.structure.assembly as assembly
+
+    build = _structure_builder(variant)
+    fast_model = build()
+    calls = []
+    reference = getattr(assembly, by_one)
+
+    def one_by_one(*args):
+        calls.append(1)
+        return reference(*args)
+
+    monkeypatch.setattr(assembly, at_once, one_by_one)
+    slow_model = build()
+    assert calls and fast_model.packed.tri_ptr.size > 1 and fast_model.packed.pad_rail.size
+    assert fast_model.triple_kinds == slow_model.triple_kinds
+    fast, slow = _packed_arrays(fast_model), _packed_arrays(slow_model)
+    assert fast.keys() == slow.keys()
+    for name in fast:
+        assert fast[name].dtype == slow[name].dtype, name
+        np.testing.assert_array_equal(fast[name], slow[name], err_msg=name)
+        if fast[name].dtype.kind == "f":
+            np.testing.assert_array_equal(np.signbit(fast[name]), np.signbit(slow[name]),
+                                          err_msg=name)

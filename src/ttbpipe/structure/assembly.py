@@ -24,7 +24,7 @@ from . import properties as P
 from .carriers import (CARRIER_PARAMETERS, PARAMETER_CARRIER, carrier_positions, factored,
                        nominal_properties)
 from .damping import girder_damping_ratio
-from .girder import SpanReduction, hermite_shape, reduce_span
+from .girder import SpanReduction, hermite, hermite_shape, reduce_span
 from .kernels import StructurePacked, group_triple_entries
 from .layout import Layout, make_layout
 from .pier import PierReduction, pier_from_config
@@ -164,13 +164,15 @@ def _ca_deck_rows(rz: np.ndarray, ry: np.ndarray, rr: np.ndarray, e_track: float
     train into the girder's vertical and lateral directions: on a curve at balanced cant the
     wheel forces are normal to the track plane and the girder receives the weight downwards
     and the centrifugal force outwards. Roll is unchanged. theta = 0 returns the level rows as
-    they were (bit for bit)."""
+    they were (bit for bit). ``e_track``, ``theta``: numbers, or columns (k, 1) against rows
+    (k, n) of k points."""
     z = rz + e_track * rr
     y = ry - h_deck * rr
-    if theta == 0.0:
+    canted = np.asarray(theta) != 0.0
+    if not np.any(canted):
         return z, y
     c, s = np.cos(theta), np.sin(theta)
-    return c * z - s * y, c * y + s * z
+    return np.where(canted, c * z - s * y, z), np.where(canted, c * y + s * z, y)
 
 
 def _plan_offsets_at_ca_points(slab_elems: list, spans: list, curved_span: list,
@@ -219,6 +221,285 @@ def _check_rails_on_deck(girder: Mapping[str, Any], layout: Layout, spans: list,
                     "(structure.girder.deck_width_m); check girder.track_offset(s)_m and the "
                     "deck width, or on a curve a larger radius or placement_on_curves: "
                     "split_versine")
+
+
+#: The rail pads' groups in the packed structure's order (kernels._pad_forces): on a slab
+#: element, on a sleeper, on rigid ground.
+PAD_KINDS = ("slab", "ballasted", "rigid")
+
+
+def _pad_arrays(pads: Mapping[str, list]) -> dict[str, np.ndarray]:
+    """The packed structure's pad fields from {kind: [(rail DOF, seat a, seat b, (xi, L, e),
+    k3, c3), ...]} lists, the groups in :data:`PAD_KINDS` order."""
+    pad_all = [q for kind in PAD_KINDS for q in pads[kind]]
+    ints = lambda col: np.array([q[col] for q in pad_all], dtype=np.int64)  # noqa: E731
+    floats = lambda col: (np.array([q[col] for q in pad_all], dtype=float).ravel()  # noqa: E731
+                          if pad_all else np.zeros(0))
+    return dict(pad_rail=ints(0), pad_seat_a=ints(1), pad_seat_b=ints(2), pad_geom=floats(3),
+                pad_k=floats(4), pad_c=floats(5),
+                pad_group=np.array([len(pads[kind]) for kind in PAD_KINDS], dtype=np.int64))
+
+
+def _pad_seat_elements(x: np.ndarray, zone: str, track: int, slab_elems: list,
+                       elem_zone: np.ndarray, elem_track: np.ndarray) -> np.ndarray:
+    """The slab element under each rail node at ``x`` of ``zone`` on ``track``: the first of
+    that zone and track whose ends hold x (1e-9 m tolerance), else the one with the nearest
+    end."""
+    cand = np.flatnonzero((elem_zone == zone) & (elem_track == track))
+    xa = np.array([slab_elems[j][0] for j in cand], dtype=float)[None, :]
+    xb = np.array([slab_elems[j][1] for j in cand], dtype=float)[None, :]
+    x = x[:, None]
+    inside = (xa <= x + 1e-9) & (x <= xb + 1e-9)
+    nearest = np.argmin(np.minimum(np.abs(xa - x), np.abs(xb - x)), axis=1)
+    return cand[np.where(inside.any(axis=1), np.argmax(inside, axis=1), nearest)]
+
+
+def _rail_pads(layout: Layout, bridge_kind: str, approach_kind: str, slab_elems: list,
+               props: Mapping[str, np.ndarray], n_tracks: int, half_gauge: float, bf2: float,
+               sleeper_dof0: int, ns_track: int, sleeper_of_node: np.ndarray
+               ) -> dict[str, np.ndarray]:
+    """The packed structure's rail pad fields (kernels._pad_forces), every pad at once, in the
+    order of :func:`_rail_pads_by_node` and bit for bit its arrays
+    (tests/test_structure_matrices.py): grouped by :data:`PAD_KINDS`, within a group rail node
+    by node, track by track, rail 2t (offset +e) before rail 2t + 1 (-e). A pad has its rail DOF, its
+    seat (a slab element's end nodes with (xi, L) of the node on it, a sleeper, or none), the
+    rail's lateral offset e and (k, c) vertical, lateral and roll (the foot's width:
+    k b_f^2 / 12)."""
+    n_rn = layout.rail_x.size
+    zones = np.asarray(layout.rail_zone)
+    kinds = np.where(zones == "bridge", bridge_kind, approach_kind)
+    elem_zone = np.array([e[4] for e in slab_elems])
+    elem_track = np.array([e[5] for e in slab_elems], dtype=np.int64)
+    side = np.arange(2)[None, None, :]
+    e_r = np.where(side == 0, half_gauge, -half_gauge)
+    parts: dict[str, list] = {name: [] for name in ("pad_rail", "pad_seat_a", "pad_seat_b",
+                                                     "pad_geom", "pad_k", "pad_c")}
+    for kind in PAD_KINDS:
+        nodes = np.flatnonzero(kinds == kind)
+        node = nodes[:, None, None]                     # (node, track, side)
+        track = np.arange(n_tracks)[None, :, None]
+        rail = 2 * track + side
+        shape = (nodes.size, n_tracks, 2)
+        kz, cz, ky, cy = (props[f"pad_{name}"][rail, node] for name in ("kz", "cz", "ky", "cy"))
+        xi = length = np.zeros(shape)
+        if kind == "slab":
+            seat = np.zeros((nodes.size, n_tracks, 1), dtype=np.int64)
+            for t in range(n_tracks):
+                for zone in np.unique(zones[nodes]):
+                    here = np.flatnonzero(zones[nodes] == zone)
+                    seat[here, t, 0] = _pad_seat_elements(layout.rail_x[nodes[here]], str(zone),
+                                                          t, slab_elems, elem_zone, elem_track)
+            xa = np.array([e[0] for e in slab_elems], dtype=float)[seat]
+            length = np.array([e[1] for e in slab_elems], dtype=float)[seat] - xa
+            xi = np.clip((layout.rail_x[node] - xa) / length, 0.0, 1.0)
+            seat_a = np.array([e[2] for e in slab_elems], dtype=np.int64)[seat]
+            seat_b = np.array([e[3] for e in slab_elems], dtype=np.int64)[seat]
+        elif kind == "ballasted":
+            seat_a = sleeper_dof0 + 3 * (track * ns_track + sleeper_of_node[node])
+            seat_b = np.int64(-1)
+        else:   # rigid ground
+            seat_a = seat_b = np.int64(-1)
+        full = lambda a: np.broadcast_to(a, shape)  # noqa: E731
+        parts["pad_rail"].append(full(5 * (rail * n_rn + node)))
+        parts["pad_seat_a"].append(full(seat_a))
+        parts["pad_seat_b"].append(full(seat_b))
+        parts["pad_geom"].append(np.stack([full(xi), full(length), full(e_r)], axis=-1))
+        parts["pad_k"].append(np.stack([kz, ky, kz * bf2], axis=-1))
+        parts["pad_c"].append(np.stack([cz, cy, cz * bf2], axis=-1))
+    arrays = {name: np.concatenate([np.ravel(a) for a in values]).astype(
+        np.int64 if name in ("pad_rail", "pad_seat_a", "pad_seat_b") else float)
+        for name, values in parts.items()}
+    arrays["pad_group"] = np.array([a.size for a in parts["pad_rail"]], dtype=np.int64)
+    return arrays
+
+
+def _rail_pads_by_node(layout: Layout, bridge_kind: str, approach_kind: str, slab_elems: list,
+                       props: Mapping[str, np.ndarray], n_tracks: int, half_gauge: float,
+                       bf2: float, sleeper_dof0: int, ns_track: int, sleeper_of_node: np.ndarray
+                       ) -> dict[str, np.ndarray]:
+    """:func:`_rail_pads` one rail node at a time: the obviously correct reference of
+    tests/test_structure_matrices.py."""
+    n_rn = layout.rail_x.size
+    pads: dict[str, list] = {kind: [] for kind in PAD_KINDS}
+    slab_x = np.array([[e[0], e[1]] for e in slab_elems]).reshape(-1, 2)
+    elem_zone = np.array([e[4] for e in slab_elems])
+    elem_track = np.array([e[5] for e in slab_elems], dtype=np.int64)
+    for i, x in enumerate(layout.rail_x):
+        zone = layout.rail_zone[i]
+        kind = bridge_kind if zone == "bridge" else approach_kind
+        for t in range(n_tracks):
+            seat = None
+            if kind == "slab":
+                cand = np.flatnonzero((elem_zone == zone) & (elem_track == t))
+                xa = slab_x[cand, 0]; xb = slab_x[cand, 1]
+                inside = np.flatnonzero((xa <= x + 1e-9) & (x <= xb + 1e-9))
+                j = cand[inside[0]] if inside.size else cand[int(np.argmin(
+                    np.minimum(np.abs(xa - x), np.abs(xb - x))))]
+                xa_j, xb_j, da, db, _, _ = slab_elems[j]
+                Ls = xb_j - xa_j
+                xi = float(np.clip((x - xa_j) / Ls, 0.0, 1.0))
+                seat = (da, db, xi, Ls)
+            for r in (2 * t, 2 * t + 1):
+                e_r = half_gauge if r % 2 == 0 else -half_gauge
+                rd = 5 * (r * n_rn + i)
+                kz, cz = props["pad_kz"][r, i], props["pad_cz"][r, i]
+                ky, cy = props["pad_ky"][r, i], props["pad_cy"][r, i]
+                k3, c3 = (kz, ky, kz * bf2), (cz, cy, cz * bf2)
+                if kind == "slab":
+                    da, db, xi, Ls = seat
+                    pads["slab"].append((rd, da, db, (xi, Ls, e_r), k3, c3))
+                elif kind == "ballasted":
+                    sd = sleeper_dof0 + 3 * (t * ns_track + sleeper_of_node[i])
+                    pads["ballasted"].append((rd, sd, -1, (0.0, 0.0, e_r), k3, c3))
+                else:  # rigid ground
+                    pads["rigid"].append((rd, -1, -1, (0.0, 0.0, e_r), k3, c3))
+    return _pad_arrays(pads)
+
+
+def _ca_foundation_coefficients(slab_elems: list, props: Mapping[str, np.ndarray], cfg: dict
+                                ) -> tuple[np.ndarray, ...]:
+    """(kz, cz, ky, cy) per slab element, per metre: the CA mortar's on the bridge, the
+    foundation's (``slab_on_subgrade``, scaled by the element's CA factors) elsewhere."""
+    bridge = np.array([e[4] == "bridge" for e in slab_elems], dtype=bool)
+    sub, ca = cfg["slab_on_subgrade"], cfg["ca"]
+    out = []
+    for name, key in (("kz", "N_m2"), ("cz", "Ns_m2"), ("ky", "N_m2"), ("cy", "Ns_m2")):
+        values = np.array(props[f"ca_{name}"], dtype=float)[:bridge.size]
+        ground = ~bridge
+        values[ground] = float(sub[f"foundation_{name}_{key}"]) * (
+            values[ground] / float(ca[f"{name}_{key}"]))
+        out.append(values)
+    return tuple(out)
+
+
+def _ca_triples(links: LinkAccumulator, slab_elems: list, spans: list, span_dof0: list,
+                props: Mapping[str, np.ndarray], cfg: dict, track_offsets: np.ndarray,
+                cant, plan_offset: np.ndarray, curved_span: list, t_half: float, b2: float,
+                h_deck: float) -> None:
+    """The CA mortar (bridge) or foundation (slab on subgrade) link triples of every slab
+    element, added to ``links`` in the order of :func:`_ca_triples_by_point` (element by
+    element, its three quadrature points in turn) with the same DOFs and coefficients, bit for
+    bit (tests/test_structure_matrices.py), computed for all points at once.
+
+    A consistent distributed foundation: 3-point Gauss quadrature of k N^T N over the element,
+    the slab's Hermite (vertical, lateral) and linear (roll) shape functions against the girder's
+    rows at each point. A point's DOFs are, in this order: the slab's vertical ends and slopes,
+    its roll ends, the girder span's DOFs (on the bridge), the slab's lateral ends and slopes;
+    those whose three coefficients are all zero are left out."""
+    n_el = len(slab_elems)
+    if n_el == 0:
+        return
+    xa = np.array([e[0] for e in slab_elems], dtype=float)
+    xb = np.array([e[1] for e in slab_elems], dtype=float)
+    da = np.array([e[2] for e in slab_elems], dtype=np.int64)
+    db = np.array([e[3] for e in slab_elems], dtype=np.int64)
+    bridge = np.array([e[4] == "bridge" for e in slab_elems], dtype=bool)
+    e_track = track_offsets[np.array([e[5] for e in slab_elems], dtype=np.int64)]
+    kz, cz, ky, cy = _ca_foundation_coefficients(slab_elems, props, cfg)
+    xi = np.array([g[0] for g in GAUSS3])[None, :]
+    Ls = (xb - xa)[:, None]
+    x = xa[:, None] + xi * Ls                                   # (n_el, 3) quadrature points
+    w = np.array([g[1] for g in GAUSS3])[None, :] * Ls
+    N = hermite.py_func(np.broadcast_to(xi, x.shape), np.broadcast_to(Ls, x.shape))
+    # the span under each bridge point: the first that holds it (a common end: the first span)
+    span_of = np.full(x.shape, -1, dtype=np.int64)
+    for s, red in enumerate(spans):
+        here = (bridge[:, None] & (span_of < 0) & (red.start_m - 1e-9 <= x)
+                & (x <= red.start_m + red.length_m + 1e-9))
+        span_of[here] = s
+    n_points = x.size
+    n_girder = np.array([red.n for red in spans] + [0], dtype=np.int64)[span_of.ravel()]
+    width = 10 + int(n_girder.max())
+    dofs = np.zeros((n_points, width), dtype=np.int64)
+    coef = np.zeros((n_points, width, 3))
+    valid = np.zeros((n_points, width), dtype=bool)
+    a = np.repeat(da, 3)
+    b = np.repeat(db, 3)
+    xi_p = np.broadcast_to(xi, x.shape).ravel()
+    dofs[:, :6] = np.stack([a, a + 1, b, b + 1, a + 4, b + 4], axis=1)
+    valid[:, :6] = True
+    for col in range(4):
+        coef[:, col, 0] += N[col].ravel()
+    coef[:, 4, 1] += t_half * (1 - xi_p)
+    coef[:, 5, 1] += t_half * xi_p
+    coef[:, 4, 2] += 1 - xi_p
+    coef[:, 5, 2] += xi_p
+    lateral = (a + 2, a + 3, b + 2, b + 3)
+    x_p, span_p = x.ravel(), span_of.ravel()
+    for s in [-1, *range(len(spans))]:
+        points = np.flatnonzero(span_p == s)
+        if not points.size:
+            continue
+        n = 0 if s < 0 else spans[s].n
+        if n:
+            rz, ry, rr = spans[s].rows_at_many(x_p[points])
+            # the deck under the track's centre line (paper eq. 24), in the track plane; on a
+            # curve the centre line runs off the straight girder's axis
+            e_here = e_track[points // 3]
+            if curved_span[s]:
+                e_here = e_here + plan_offset.ravel()[points]
+            theta = (np.zeros(points.size) if cant is None
+                     else np.interp(x_p[points], cant[0], cant[1]))
+            deck_z, deck_y = _ca_deck_rows(rz, ry, rr, e_here[:, None], h_deck, theta[:, None])
+            dofs[points, 6:6 + n] = span_dof0[s] + np.arange(n)
+            valid[points, 6:6 + n] = True
+            coef[points, 6:6 + n, 0] += -deck_z
+            coef[points, 6:6 + n, 1] += -deck_y
+            coef[points, 6:6 + n, 2] += -rr
+        for col, dof in enumerate(lateral):
+            dofs[points, 6 + n + col] = dof[points]
+            valid[points, 6 + n + col] = True
+            coef[points, 6 + n + col, 1] += N[col].ravel()[points]
+    keep = valid & np.any(coef != 0.0, axis=2)
+    k3 = np.stack([kz[:, None] * w, ky[:, None] * w, kz[:, None] * w * b2], axis=2)
+    c3 = np.stack([cz[:, None] * w, cy[:, None] * w, cz[:, None] * w * b2], axis=2)
+    links.add_triples(keep.sum(axis=1), dofs[keep], coef[keep], k3.reshape(-1, 3),
+                      c3.reshape(-1, 3), "ca")
+
+
+def _ca_triples_by_point(links: LinkAccumulator, slab_elems: list, spans: list,
+                         span_dof0: list, props: Mapping[str, np.ndarray], cfg: dict,
+                         track_offsets: np.ndarray, cant, plan_offset: np.ndarray,
+                         curved_span: list, t_half: float, b2: float, h_deck: float) -> None:
+    """:func:`_ca_triples` one quadrature point at a time: the obviously correct reference of
+    tests/test_structure_matrices.py."""
+    kz_all, cz_all, ky_all, cy_all = _ca_foundation_coefficients(slab_elems, props, cfg)
+
+    def span_rows(x: float):
+        """(span index, z row, y row, roll row) of the girder under x, or None."""
+        for s, red in enumerate(spans):
+            if red.start_m - 1e-9 <= x <= red.start_m + red.length_m + 1e-9:
+                return s, *red.rows_at(x)
+        return None
+
+    for j, (xa, xb, da, db, zone, t) in enumerate(slab_elems):
+        e_track = float(track_offsets[t])
+        kz, cz, ky, cy = kz_all[j], cz_all[j], ky_all[j], cy_all[j]
+        Ls = xb - xa
+        for g_index, (xi_g, w_g) in enumerate(GAUSS3):
+            x = xa + xi_g * Ls
+            w = w_g * Ls
+            N = hermite_shape(xi_g, Ls)
+            zd, zc = [da, da + 1, db, db + 1], list(N)
+            zd += [da + 4, db + 4]; zc += [0.0, 0.0]
+            yd = [da + 2, da + 3, db + 2, db + 3, da + 4, db + 4]
+            yc = [*N, t_half * (1 - xi_g), t_half * xi_g]
+            rdofs, rc = [da + 4, db + 4], [1 - xi_g, xi_g]
+            g = span_rows(x) if zone == "bridge" else None
+            if g is not None:
+                s, rz, ry, rr = g
+                o = span_dof0[s]
+                idx = list(range(o, o + spans[s].n))
+                theta = 0.0 if cant is None else float(np.interp(x, cant[0], cant[1]))
+                e_here = e_track
+                if curved_span[s]:
+                    e_here = e_track + float(plan_offset[j, g_index])
+                deck_z, deck_y = _ca_deck_rows(rz, ry, rr, e_here, h_deck, theta)
+                zd, zc = zd + idx, zc + list(-deck_z)
+                yd, yc = yd + idx, yc + list(-deck_y)
+                rdofs, rc = rdofs + idx, rc + list(-rr)
+            links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)],
+                             (kz * w, ky * w, kz * w * b2), (cz * w, cy * w, cz * w * b2), "ca")
 
 
 def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
@@ -376,53 +657,18 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
             slab_elems.append((xs[i], xs[i + 1], d0[i], d0[i + 1], zone, t))
     slab_x = np.array([[e[0], e[1]] for e in slab_elems]).reshape(-1, 2)
 
-    def span_rows(x: float):
-        """(span index, z row, y row, roll row) of the girder under x, or None."""
-        for s, red in enumerate(spans):
-            if red.start_m - 1e-9 <= x <= red.start_m + red.length_m + 1e-9:
-                return s, *red.rows_at(x)
-        return None
-
     # rail pads, compact form (kernels._pad_forces), grouped slab / ballasted / rigid:
     # (rail DOF, seat a, seat b, (xi, L, e), k3, c3) per pad
-    pads: dict[str, list] = {"slab": [], "ballasted": [], "rigid": []}
+    pad_arrays = _pad_arrays({kind: [] for kind in PAD_KINDS})
     bal_sleeper = bal_block = bal_next = np.zeros(0, dtype=np.int64)
     half_gauge = 0.5 * float(fas["rail_centre_distance_m"])
     d_f = float(rail_c["foot_depth_m"])
     t_half = 0.5 * float(slab_c["thickness_m"])
     if has_track:
         bf2 = float(rail_c["foot_width_m"]) ** 2 / 12.0
-        elem_zone = np.array([e[4] for e in slab_elems])
-        elem_track = np.array([e[5] for e in slab_elems], dtype=np.int64)
-        for i, x in enumerate(layout.rail_x):
-            zone = layout.rail_zone[i]
-            kind = lay["bridge_track"] if zone == "bridge" else lay["approach_track"]
-            for t in range(n_tracks):
-                seat = None
-                if kind == "slab":
-                    cand = np.flatnonzero((elem_zone == zone) & (elem_track == t))
-                    xa = slab_x[cand, 0]; xb = slab_x[cand, 1]
-                    inside = np.flatnonzero((xa <= x + 1e-9) & (x <= xb + 1e-9))
-                    j = cand[inside[0]] if inside.size else cand[int(np.argmin(
-                        np.minimum(np.abs(xa - x), np.abs(xb - x))))]
-                    xa_j, xb_j, da, db, _, _ = slab_elems[j]
-                    Ls = xb_j - xa_j
-                    xi = float(np.clip((x - xa_j) / Ls, 0.0, 1.0))
-                    seat = (da, db, xi, Ls)
-                for r in (2 * t, 2 * t + 1):
-                    e_r = half_gauge if r % 2 == 0 else -half_gauge
-                    rd = 5 * (r * n_rn + i)
-                    kz, cz = props["pad_kz"][r, i], props["pad_cz"][r, i]
-                    ky, cy = props["pad_ky"][r, i], props["pad_cy"][r, i]
-                    k3, c3 = (kz, ky, kz * bf2), (cz, cy, cz * bf2)
-                    if kind == "slab":
-                        da, db, xi, Ls = seat
-                        pads["slab"].append((rd, da, db, (xi, Ls, e_r), k3, c3))
-                    elif kind == "ballasted":
-                        sd = off["sleeper"] + 3 * (t * ns_track + sleeper_of_node[i])
-                        pads["ballasted"].append((rd, sd, -1, (0.0, 0.0, e_r), k3, c3))
-                    else:  # rigid ground
-                        pads["rigid"].append((rd, -1, -1, (0.0, 0.0, e_r), k3, c3))
+        pad_arrays = _rail_pads(layout, lay["bridge_track"], lay["approach_track"], slab_elems,
+                                props, n_tracks, half_gauge, bf2, off["sleeper"], ns_track,
+                                sleeper_of_node)
         # ballast (kernels._ballast_forces): per sleeper its DOFs, its blocks, whether the next
         # sleeper is adjacent (shear springs between neighbouring blocks); track after track,
         # each on its own ballast (no shear between the tracks' blocks)
@@ -442,49 +688,9 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         curved_span = [span_is_curved(plan, red.start_m, red.length_m) for red in spans]
         _check_rails_on_deck(g_c, layout, spans, plan, placement, half_gauge)
         plan_offset = _plan_offsets_at_ca_points(slab_elems, spans, curved_span, plan, placement)
-        h_deck = float(g_c["deck_height_m"])
-        sub = cfg["slab_on_subgrade"]
-        for j, (xa, xb, da, db, zone, t) in enumerate(slab_elems):
-            e_track = float(layout.track_offsets_m[t])
-            if zone == "bridge":
-                kz, cz = props["ca_kz"][j], props["ca_cz"][j]
-                ky, cy = props["ca_ky"][j], props["ca_cy"][j]
-            else:
-                scale = lambda name, key: props[name][j] / float(cfg["ca"][key])  # noqa: E731
-                kz = float(sub["foundation_kz_N_m2"]) * scale("ca_kz", "kz_N_m2")
-                cz = float(sub["foundation_cz_Ns_m2"]) * scale("ca_cz", "cz_Ns_m2")
-                ky = float(sub["foundation_ky_N_m2"]) * scale("ca_ky", "ky_N_m2")
-                cy = float(sub["foundation_cy_Ns_m2"]) * scale("ca_cy", "cy_Ns_m2")
-            # consistent distributed foundation: 3-point Gauss quadrature of k N^T N over the
-            # element (slab Hermite/linear shape functions, girder basis at each point)
-            Ls = xb - xa
-            for g_index, (xi_g, w_g) in enumerate(GAUSS3):
-                x = xa + xi_g * Ls
-                w = w_g * Ls
-                N = hermite_shape(xi_g, Ls)
-                zd, zc = [da, da + 1, db, db + 1], list(N)
-                zd += [da + 4, db + 4]; zc += [0.0, 0.0]
-                yd = [da + 2, da + 3, db + 2, db + 3, da + 4, db + 4]
-                yc = [*N, t_half * (1 - xi_g), t_half * xi_g]
-                rdofs, rc = [da + 4, db + 4], [1 - xi_g, xi_g]
-                g = span_rows(x) if zone == "bridge" else None
-                if g is not None:
-                    s, rz, ry, rr = g
-                    o = span_dof0[s]
-                    idx = list(range(o, o + spans[s].n))
-                    # the deck under the track's centre line (paper eq. 24), in the track
-                    # plane; on a curve the centre line runs off the straight girder's axis
-                    theta = 0.0 if cant is None else float(np.interp(x, cant[0], cant[1]))
-                    e_here = e_track
-                    if curved_span[s]:
-                        e_here = e_track + float(plan_offset[j, g_index])
-                    deck_z, deck_y = _ca_deck_rows(rz, ry, rr, e_here, h_deck, theta)
-                    zd, zc = zd + idx, zc + list(-deck_z)
-                    yd, yc = yd + idx, yc + list(-deck_y)
-                    rdofs, rc = rdofs + idx, rc + list(-rr)
-                links.add_triple([(zd, zc), (yd, yc), (rdofs, rc)],
-                                 (kz * w, ky * w, kz * w * b2), (cz * w, cy * w, cz * w * b2),
-                                 "ca")
+        _ca_triples(links, slab_elems, spans, span_dof0, props, cfg,
+                    np.asarray(layout.track_offsets_m, dtype=float), cant, plan_offset,
+                    curved_span, t_half, b2, float(g_c["deck_height_m"]))
     # bearings: girder end (z, y, roll) -> pier (y, z, roll) or abutment (ground)
     if not brg["rigid"]:
         eb = 0.5 * float(brg["lateral_spacing_m"])
@@ -528,10 +734,6 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
     tptr, tdof, tcoef, tk, tc = links.triple_arrays()
     tri_group_end, tri_kernel_dof, tri_kernel_coef, tri_run_of_three = group_triple_entries(
         tptr, tdof, tcoef)
-    pad_all = pads["slab"] + pads["ballasted"] + pads["rigid"]
-    pad_int = lambda col: np.array([q[col] for q in pad_all], dtype=np.int64)  # noqa: E731
-    pad_flt = lambda col: (np.array([q[col] for q in pad_all], dtype=float).ravel()  # noqa: E731
-                           if pad_all else np.zeros(0))
     cat = lambda parts, dt=float: (np.concatenate(parts).astype(dt) if parts  # noqa: E731
                                    else np.zeros(0, dtype=dt))
     packed = StructurePacked(
@@ -548,10 +750,7 @@ def _assemble(cfg: dict, layout: Layout, props: Mapping[str, np.ndarray],
         rail_dx=float(layout.rail_x[1] - layout.rail_x[0]), rail_n_nodes=int(n_rn),
         rail_dof0=5 * n_rn * np.arange(max(n_rails, 2), dtype=np.int64),
         tri_ptr=tptr, tri_dof=tdof, tri_coef=tcoef, tri_k=tk, tri_c=tc,
-        pad_rail=pad_int(0), pad_seat_a=pad_int(1), pad_seat_b=pad_int(2), pad_geom=pad_flt(3),
-        pad_k=pad_flt(4), pad_c=pad_flt(5),
-        pad_group=np.array([len(pads["slab"]), len(pads["ballasted"]), len(pads["rigid"])],
-                           dtype=np.int64),
+        **pad_arrays,
         pad_foot_depth=d_f, pad_seat_half_thickness=t_half,
         bal_sleeper=bal_sleeper, bal_block=bal_block, bal_next=bal_next,
         bal_k=np.array([bal["ballast_kz_N_m"], bal["subgrade_k_N_m"], bal["shear_k_N_m"],

@@ -19,10 +19,13 @@ class LinkAccumulator:
         self.k: list[float] = []
         self.c: list[float] = []
         self.kind: list[str] = []
+        # triples in chunks of one or more: DOFs per triple, their DOFs and (n, 3) coefficients
+        # one after the other, (k, 3) stiffnesses and dampings
+        self.tri_counts: list[np.ndarray] = []
         self.tri_dofs: list[np.ndarray] = []
         self.tri_coefs: list[np.ndarray] = []
-        self.tri_k: list[list[float]] = []
-        self.tri_c: list[list[float]] = []
+        self.tri_k: list[np.ndarray] = []
+        self.tri_c: list[np.ndarray] = []
         self.tri_kind: list[str] = []
 
     def add(self, dofs, coefs, k: float, c: float, kind: str) -> None:
@@ -43,20 +46,30 @@ class LinkAccumulator:
             for q, c in zip(dofs, coefs):
                 coef[union[int(q)], r] += c
         keep = np.any(coef != 0.0, axis=1)
-        self.tri_dofs.append(np.fromiter(union, dtype=np.int64)[keep])
-        self.tri_coefs.append(coef[keep])
-        self.tri_k.append([float(v) for v in k3]); self.tri_c.append([float(v) for v in c3])
-        self.tri_kind.append(kind)
+        dofs = np.fromiter(union, dtype=np.int64)[keep]
+        self.add_triples(np.array([dofs.size]), dofs, coef[keep], [k3], [c3], kind)
+
+    def add_triples(self, counts, dofs, coefs, k3, c3, kind: str) -> None:
+        """Several triples at once, in order: ``counts[i]`` DOFs of triple i, the triples' DOFs
+        and (n, 3) coefficients one after the other (no zero rows), (len(counts), 3) stiffnesses
+        and dampings."""
+        counts = np.asarray(counts, dtype=np.int64)
+        self.tri_counts.append(counts)
+        self.tri_dofs.append(np.asarray(dofs, dtype=np.int64))
+        self.tri_coefs.append(np.asarray(coefs, dtype=float).reshape(-1, 3))
+        self.tri_k.append(np.asarray(k3, dtype=float).reshape(-1, 3))
+        self.tri_c.append(np.asarray(c3, dtype=float).reshape(-1, 3))
+        self.tri_kind.extend([kind] * counts.size)
 
     def triple_arrays(self):
         """(ptr, dof, coef (3 per dof, flattened), k (3 per triple), c (3 per triple))."""
-        ptr = np.zeros(len(self.tri_k) + 1, dtype=np.int64)
-        ptr[1:] = np.cumsum([d.size for d in self.tri_dofs])
-        if not self.tri_k:
-            return ptr, np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros(0)
-        return (ptr, np.concatenate(self.tri_dofs).astype(np.int64),
-                np.concatenate(self.tri_coefs).ravel(), np.array(self.tri_k, float).ravel(),
-                np.array(self.tri_c, float).ravel())
+        if not self.tri_kind:
+            return (np.zeros(1, dtype=np.int64), np.zeros(0, np.int64), np.zeros(0), np.zeros(0),
+                    np.zeros(0))
+        ptr = np.zeros(len(self.tri_kind) + 1, dtype=np.int64)
+        ptr[1:] = np.cumsum(np.concatenate(self.tri_counts))
+        return (ptr, np.concatenate(self.tri_dofs), np.concatenate(self.tri_coefs).ravel(),
+                np.concatenate(self.tri_k).ravel(), np.concatenate(self.tri_c).ravel())
 
     def arrays(self):
         """CSR arrays in insertion order (sorting by term count measured no faster)."""
