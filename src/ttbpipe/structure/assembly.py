@@ -281,7 +281,7 @@ def _rail_pads(layout: Layout, bridge_kind: str, approach_kind: str, slab_elems:
         rail = 2 * track + side
         shape = (nodes.size, n_tracks, 2)
         kz, cz, ky, cy = (props[f"pad_{name}"][rail, node] for name in ("kz", "cz", "ky", "cy"))
-        xi = length = np.zeros(shape)
+        xi, length = np.zeros(shape), np.zeros(shape)     # a seat's position: slab pads only
         if kind == "slab":
             seat = np.zeros((nodes.size, n_tracks, 1), dtype=np.int64)
             for t in range(n_tracks):
@@ -396,9 +396,10 @@ def _ca_triples(links: LinkAccumulator, slab_elems: list, spans: list, span_dof0
     bridge = np.array([e[4] == "bridge" for e in slab_elems], dtype=bool)
     e_track = track_offsets[np.array([e[5] for e in slab_elems], dtype=np.int64)]
     kz, cz, ky, cy = _ca_foundation_coefficients(slab_elems, props, cfg)
+    n_gauss = len(GAUSS3)
     xi = np.array([g[0] for g in GAUSS3])[None, :]
     Ls = (xb - xa)[:, None]
-    x = xa[:, None] + xi * Ls                                   # (n_el, 3) quadrature points
+    x = xa[:, None] + xi * Ls                             # (n_el, n_gauss) quadrature points
     w = np.array([g[1] for g in GAUSS3])[None, :] * Ls
     N = hermite.py_func(np.broadcast_to(xi, x.shape), np.broadcast_to(Ls, x.shape))
     # the span under each bridge point: the first that holds it (a common end: the first span)
@@ -413,8 +414,8 @@ def _ca_triples(links: LinkAccumulator, slab_elems: list, spans: list, span_dof0
     dofs = np.zeros((n_points, width), dtype=np.int64)
     coef = np.zeros((n_points, width, 3))
     valid = np.zeros((n_points, width), dtype=bool)
-    a = np.repeat(da, 3)
-    b = np.repeat(db, 3)
+    a = np.repeat(da, n_gauss)
+    b = np.repeat(db, n_gauss)
     xi_p = np.broadcast_to(xi, x.shape).ravel()
     dofs[:, :6] = np.stack([a, a + 1, b, b + 1, a + 4, b + 4], axis=1)
     valid[:, :6] = True
@@ -435,7 +436,7 @@ def _ca_triples(links: LinkAccumulator, slab_elems: list, spans: list, span_dof0
             rz, ry, rr = spans[s].rows_at_many(x_p[points])
             # the deck under the track's centre line (paper eq. 24), in the track plane; on a
             # curve the centre line runs off the straight girder's axis
-            e_here = e_track[points // 3]
+            e_here = e_track[points // n_gauss]
             if curved_span[s]:
                 e_here = e_here + plan_offset.ravel()[points]
             theta = (np.zeros(points.size) if cant is None

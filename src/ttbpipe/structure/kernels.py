@@ -25,6 +25,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from ..index_ranges import range_span as _element_span
 from ..jit import kernel
 from .shape_functions import hermite
 
@@ -56,13 +57,6 @@ StructurePacked.__new__.__defaults__ = (
 # Element indices are unsigned in the element loops: numba then drops the negative-index
 # wrap-around test on every access it makes with them (10-15 % of the beam and pad loops).
 _ONE, _TWO, _THREE = np.uint64(1), np.uint64(2), np.uint64(3)
-
-
-@kernel
-def _element_span(ranges, k, n):
-    """Row k of element ``ranges`` as unsigned [start, end) (end -1: ``n``)."""
-    end = ranges[k, 1]
-    return np.uint64(ranges[k, 0]), np.uint64(end if end >= 0 else n)
 
 
 @kernel(inline="always")

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
+from ..index_ranges import range_span
 from ..jit import kernel
 
 
@@ -39,11 +40,9 @@ def zhai_predict_ranges(disp, vel, acc, acc_prev, dt, psi, phi, ranges, n_ranges
     ``ranges`` (end -1: to the last entry). The others must hold zero velocity and
     accelerations (the frozen track of a moving window, :mod:`ttbpipe.structure.window`): the
     update would leave them as they are."""
-    n = disp.shape[0]
     for k in range(n_ranges):
-        end = ranges[k, 1]
-        _zhai_predict_span(disp, vel, acc, acc_prev, dt, psi, phi, np.uint64(ranges[k, 0]),
-                           np.uint64(end if end >= 0 else n))
+        i0, i1 = range_span(ranges, k, disp.shape[0])
+        _zhai_predict_span(disp, vel, acc, acc_prev, dt, psi, phi, i0, i1)
 
 
 @kernel(inline="always")
