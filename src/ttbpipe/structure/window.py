@@ -28,7 +28,8 @@ from collections import namedtuple
 import numpy as np
 
 from ..jit import kernel
-from .kernels import _EVERY_ELEMENT, _element_span
+from ..index_ranges import range_span
+from .kernels import _EVERY_ELEMENT
 
 #: Segment length of the window's bookkeeping (m): a few fastener bays, longer than any element.
 SEGMENT_M = 5.0
@@ -216,7 +217,7 @@ def clear_moving(window, values):
             values[i] = 0.0
         return
     for k in range(window.n_ranges[DOF_RANGES]):
-        start, end = _element_span(window.dof_ranges, k, n)
+        start, end = range_span(window.dof_ranges, k, n)
         for i in range(start, end):
             values[i] = 0.0
 
