@@ -121,7 +121,7 @@ n_sbatch=$(grep -c "Job .* has been submitted with SLURM jobid" "$CHECK_DIR/slur
 n_jobs=$(wc -l < "$CHECK_DIR/slurm.sacct")
 n_done=$(grep -c '|COMPLETED|' "$CHECK_DIR/slurm.sacct" || true)
 record "slurm: ${t_slurm} s, ${n_slurm}; sacct: ${n_jobs} jobs, ${n_done} COMPLETED; sbatch submissions in the Snakemake log: ${n_sbatch}"
-record "slurm jobs per rule (sacct Comment): $(cut -d'|' -f7 "$CHECK_DIR/slurm.sacct" | sed -E 's/^rule_([a-z_]+)_wildcards.*$/\1/; s/^rule_([a-z_]+)$/\1/' | sort | uniq -c | awk '{printf "%s %s, ", $2, $1}')"
+record "slurm jobs per rule (sacct Comment): $(cut -d'|' -f7 "$CHECK_DIR/slurm.sacct" | sed -E 's/^rule_([a-z0-9_]+)_wildcards.*$/\1/; s/^rule_([a-z0-9_]+)$/\1/' | sort | uniq -c | awk '{printf "%s%s %s", (NR > 1 ? ", " : ""), $2, $1}')"
 (( n_jobs > 0 && n_jobs == n_done && n_jobs == n_sbatch )) \
     || die "SLURM jobs: $n_jobs in sacct, $n_done completed, $n_sbatch submitted ($CHECK_DIR/slurm.sacct)"
 
