@@ -24,10 +24,11 @@ from . import properties as P
 from .carriers import (CARRIER_PARAMETERS, PARAMETER_CARRIER, carrier_positions, factored,
                        nominal_properties)
 from .damping import girder_damping_ratio
-from .girder import SpanReduction, hermite, hermite_shape, reduce_span
+from .girder import SpanReduction, reduce_span
 from .kernels import StructurePacked, group_triple_entries
 from .layout import Layout, make_layout
 from .pier import PierReduction, pier_from_config
+from .shape_functions import hermite, hermite_shape
 from .plan import PLACEMENTS, plan_eccentricity_m, span_is_curved
 from .links import LinkAccumulator
 from .matrices import assemble_matrices, ballast_link_rows, pad_link_rows
