@@ -17,24 +17,14 @@ from __future__ import annotations
 
 import argparse
 import copy
-import statistics
-import time
 from pathlib import Path
 
 import numpy as np
 import yaml
 
+from _timing import median_time
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _median_ms(fn, calls: int) -> float:
-    fn()
-    times = []
-    for _ in range(calls):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return 1e3 * statistics.median(times)
 
 
 def main() -> None:
@@ -60,12 +50,12 @@ def main() -> None:
     positions = carrier_positions(nominal)
     print(f"{args.case}: {nominal.n_dof} structural DOF, {nominal.packed.pad_rail.size} rail pads, "
           f"{nominal.packed.tri_ptr.size - 1} CA link triples")
-    print(f"FIGURE structure_build_ms = {_median_ms(build, args.calls):.2f} ms")
+    print(f"FIGURE structure_build_ms = {1e3 * median_time(build, args.calls):.2f} ms")
     for kind, label in (("girder_element", "girder"), ("rail_element", "rail")):
         rng = np.random.default_rng(20261206)
         factors = {name: rng.uniform(0.8, 1.2, positions[kind].size)
                    for name in CARRIER_PARAMETERS[kind]}
-        ms = _median_ms(lambda: apply_factors(nominal, factors), args.calls)
+        ms = 1e3 * median_time(lambda: apply_factors(nominal, factors), args.calls)
         print(f"FIGURE structure_apply_factors_{label}_ms = {ms:.2f} ms")
 
 
