@@ -1002,11 +1002,42 @@ def estimate_tail(x, limit: float, weights=None,
         n_exceedances=n_exc, return_period_ratio=ratio, notes=tuple(notes))
 
 
+#: log-scale increments of the raised starts of a profile point (:func:`_profile_starts`)
+_SCALE_RAISES = tuple(0.25 * 2.0 ** k for k in range(8))
+
+
+def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
+    """The starting points of a profile point's Nelder-Mead runs (``fun``: its objective): the
+    previous profile point's optimum and the estimate's where they lie inside the support, and
+    the candidate of least ``fun`` among ``grid`` and those two points with their log-scale
+    raised step by step (:data:`_SCALE_RAISES`).
+
+    Why more than the previous optimum: when the limit lies far above the data, the profile's
+    minimum lies in a narrow band next to the support's edge (for xi > 0 the GEV's lower end
+    point mu - sigma/xi just below the smallest observation; for the GPD with xi < 0 the upper
+    end point just above the largest excess), and a simplex started from the neighbouring
+    profile point can stall at that edge far above the minimum; a start from another side
+    reaches it. As the probability at the limit grows the previous optimum leaves the support;
+    a larger scale brings a point back, which is why the raised points are candidates (a grid
+    alone finds inside the support only short-tailed points, worse by dozens of orders of
+    magnitude). An empty list: no candidate inside the support."""
+    starts = [s for s in (previous, fixed) if np.isfinite(fun(s))]
+    candidates = list(grid) + [base + np.eye(base.size)[0] * raise_
+                               for base in (previous, fixed) for raise_ in _SCALE_RAISES]
+    values = [fun(s) for s in candidates]
+    k = int(np.argmin(values))
+    if np.isfinite(values[k]):
+        starts.append(candidates[k])
+    return starts
+
+
 def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
     """Both ends of ``{log p : 2 (nll_prof(log p) - nll_hat) <= cutoff}`` (Coles 2001 §2.6.6):
     bracket by growing steps from the estimate, then Brent's method to 1e-3 in log p. Each
-    profile point starts from the previous one (a continuous path); where that start is outside
-    the support at this p, from the best point of a grid of scales and shapes. When the estimate
+    profile point is the best of Nelder-Mead runs from the previous point's optimum (a
+    continuous path), the estimate's and the best of a grid (:func:`_profile_starts`); a point
+    where none of them lies inside the support is a failed search, not a crossing
+    (:class:`TailNotEstimable`). When the estimate
     is p = 0 the upper end is approached from ``lp_top`` (log p at the largest observation)."""
     fixed = np.asarray(free_hat, float)
     warm = [fixed]
@@ -1015,19 +1046,23 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
         grid = [fixed + ds for ds in steps]
     else:
         grid = [fixed + np.array([ds, 0.0]) for ds in steps]
-        grid += [np.array([fixed[0] + ds, xi]) for ds in (-2.0, -1.0, 0.0, 1.0)
-                 for xi in (0.0, 0.1, 0.3, max(model.xi_min, -0.2))]
+        # scales up to e^9 times the estimate's: a short-tailed shape with a large scale is
+        # where a start reaches the profile's narrow band from outside (_profile_starts)
+        grid += [np.array([fixed[0] + ds, xi])
+                 for ds in (-2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 6.0, 9.0)
+                 for xi in (-0.3, -0.15, 0.0, 0.15, 0.3, 0.6, 1.0, 2.0) if xi >= model.xi_min]
 
     def prof(lp):
         fun = _Objective(model, profile=(lp, z))
-        starts = next(([s] for s in (warm[-1], fixed) if np.isfinite(fun(s))), None)
-        if starts is None:
-            values = [fun(s) for s in grid]
-            k = int(np.argmin(values))
-            starts = [grid[k]] if np.isfinite(values[k]) else []
-        res = fun.minimise(starts, tol=1e-6)
+        res = fun.minimise(_profile_starts(fun, warm[-1], fixed, grid), tol=1e-6)
         if res is None or not np.isfinite(res.fun):
-            return np.inf
+            # Not "beyond the cutoff": the profile is finite at every p in (0, 1) (a large
+            # enough scale gives every observation and the limit a positive density), so an
+            # infinite value is a failed search, and treating it as a crossing would end the
+            # interval there, too narrow.
+            raise TailNotEstimable(
+                f"{model.name} profile likelihood: no parameters inside the support found at "
+                f"P = {np.exp(lp):.3g} at the limit; no interval")
         warm.append(res.x)
         return res.fun
 
