@@ -11,7 +11,7 @@ import pytest
 from scipy import optimize, stats
 
 from ttbpipe.reliability.tail import (_GEV, _POT, TailNotEstimable, TailSettings, _Gumbel,
-                                      _Objective, _weighted_ad, estimate_tail,
+                                      _Objective, _pot_threshold, _weighted_ad, estimate_tail,
                                       gev_from_lmoments, reliability_index)
 from ttbpipe.stats.limits import ConstantLimit, LimitContext
 from ttbpipe.stats.reliability import (MET, NOT_MET, NOT_SHOWN, ReliabilitySettings,
@@ -307,16 +307,22 @@ def test_gev_lmoment_estimate_refuses_degenerate_input():
     assert shape == 0.9 and sigma > 0 and np.isfinite(mu)
 
 
-def _reference_profile_ends(x, limit):
-    """The 95 % profile-likelihood interval of P(X > limit) under an unweighted GEV, slow and
-    obviously correct: the profile at each log p minimised from the 6 best points of a 25 x 34
-    grid of (log scale, shape) over log scales -4..8 and shapes -0.45..4.5 of the
-    standardised data, each by the compiled Nelder-Mead at tol 1e-10 then scipy's Powell (an
-    independent optimiser); each end by growing brackets and brentq to 1e-5 in log p. An end
-    below 1e-30 is returned as 0, as estimate_tail reports it."""
+def _reference_profile_ends(x, limit, settings=FAST):
+    """The 95 % profile-likelihood interval of P(X > limit) under an unweighted GEV (or, with
+    ``settings.model == 'pot'``, the GPD above estimate_tail's threshold), slow and obviously
+    correct: the profile at each log p minimised from the 6 best points of a 25 x 34 grid of
+    (log scale, shape) over log scales -4..8 and shapes -0.45..4.5 of the standardised data
+    (and the estimate's shape with log scales -2..12), each by the compiled Nelder-Mead at tol
+    1e-10 then scipy's Powell (an independent optimiser); each end by growing brackets and
+    brentq to 1e-5 in log p. An end below 1e-30 is returned as 0 and one at 1 - 1e-12 as 1, as
+    estimate_tail reports them."""
     centre, spread = float(np.median(x)), float(np.std(x))
     xs, zs = (x - centre) / spread, (limit - centre) / spread
-    model = _GEV(xs, np.ones_like(xs), -0.5)
+    if settings.model == "pot":
+        threshold = (_pot_threshold(x, np.ones_like(x), settings) - centre) / spread
+        model = _POT(xs, np.ones_like(xs), threshold, settings.min_shape)
+    else:
+        model = _GEV(xs, np.ones_like(xs), settings.min_shape)
     fit = _Objective(model).minimise(model.starts(), tol=1e-10)
     with np.errstate(invalid="ignore"):   # Powell's line search meets the support's edge
         polished = optimize.minimize(_Objective(model), fit.x, method="Powell",
@@ -325,6 +331,7 @@ def _reference_profile_ends(x, limit):
     lp_hat = model.log_p(theta, zs)
     grid = [np.array([ls, xi]) for ls in np.linspace(-4, 8, 25)
             for xi in np.linspace(-0.45, 4.5, 34)]
+    grid += [model.free(theta) + np.array([ds, 0.0]) for ds in np.linspace(-2, 12, 57)]
     cutoff = stats.chi2.ppf(0.95, 1)
 
     def excess(lp):
@@ -332,6 +339,8 @@ def _reference_profile_ends(x, limit):
         values = np.array([objective(s) for s in grid])
         best = np.inf
         for k in np.argsort(values)[:6]:
+            if not np.isfinite(values[k]):
+                break
             res = objective.minimise([grid[k]], tol=1e-10)
             with np.errstate(invalid="ignore"):   # Powell's line search meets the support's edge
                 polished = optimize.minimize(objective, res.x, method="Powell",
@@ -350,6 +359,9 @@ def _reference_profile_ends(x, limit):
                 break
             if direction < 0 and outer < np.log(1e-30):
                 ends.append(0.0)
+                break
+            if direction > 0 and outer >= np.log1p(-1e-12):   # P = 1 is not excluded
+                ends.append(1.0)
                 break
             inner, step = outer, 1.5 * step
     return np.exp(lp_hat), ends[0], ends[1]
@@ -370,18 +382,29 @@ def _far_limit_case(xi, distance, seed):
     return x, float(np.median(x) + distance * np.std(x))
 
 
-@pytest.mark.parametrize("x, limit", [
-    (_FAR_LIMIT_MAXIMA, 1.0), _far_limit_case(0.6, 3000, 1), _far_limit_case(0.8, 300, 2),
-    _far_limit_case(0.5, 1000, 2)], ids=["case4_deflection", "xi0.6", "xi0.8", "xi0.5"])
-def test_profile_interval_far_beyond_the_data_equals_a_multistart_reference(x, limit):
-    """Limits hundreds to thousands of standard deviations above 20 maxima: both ends of the
-    profile interval equal the slow multi-start reference's (_reference_profile_ends) within
-    2e-3 in log p (Brent's tolerance 1e-3 plus the optimisers'); both ends 0 where the
-    reference's is below 1e-30. A profile followed from the neighbouring point alone stalled at
-    the support's edge and ended the interval 200 times too low (the upper end 1.7e-5 instead of
-    3.2e-3 for the first case)."""
-    est = estimate_tail(x, limit, settings=FAST)
-    p_ref, low_ref, high_ref = _reference_profile_ends(x, limit)
+def _far_limit_gpd_case(xi, distance, seed):
+    x = stats.genpareto.rvs(xi, size=300, random_state=np.random.default_rng(seed))
+    return x, float(np.median(x) + distance * np.std(x))
+
+
+_POT_SETTINGS = TailSettings(model="pot", gof_bootstrap=0)
+
+
+@pytest.mark.parametrize("x, limit, settings", [
+    (_FAR_LIMIT_MAXIMA, 1.0, FAST), (*_far_limit_case(0.6, 3000, 1), FAST),
+    (*_far_limit_case(0.8, 300, 2), FAST), (*_far_limit_case(0.5, 1000, 2), FAST),
+    (*_far_limit_gpd_case(0.8, 300, 4), _POT_SETTINGS),
+    (*_far_limit_gpd_case(0.6, 1000, 7), _POT_SETTINGS)],
+    ids=["case4_deflection", "xi0.6", "xi0.8", "xi0.5", "pot_xi0.8", "pot_xi0.6"])
+def test_profile_interval_far_beyond_the_data_equals_a_multistart_reference(x, limit, settings):
+    """Limits hundreds to thousands of standard deviations above the data (20 GEV maxima; 300
+    generalised Pareto values for POT): both ends of the profile interval equal the slow
+    multi-start reference's (_reference_profile_ends) within 2e-3 in log p (Brent's tolerance
+    1e-3 plus the optimisers'); both ends 0 where the reference's is below 1e-30. A GEV profile
+    followed from the neighbouring point alone stalled at the support's edge and ended the
+    interval 200 times too low (the upper end 1.7e-5 instead of 3.2e-3 for the first case)."""
+    est = estimate_tail(x, limit, settings=settings)
+    p_ref, low_ref, high_ref = _reference_profile_ends(x, limit, settings)
     assert est.probability == pytest.approx(p_ref, rel=1e-5)
     for got, ref in ((est.ci_low, low_ref), (est.ci_high, high_ref)):
         if ref == 0.0:
