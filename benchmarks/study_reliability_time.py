@@ -28,23 +28,30 @@ from ttbpipe.stats.reliability import ReliabilitySettings, assess_limits
 from ttbpipe.study import outputs, utilisation
 
 
+def study_limits(results: Path, configfile: Path):
+    """(extremes, limits, context, settings) of the finished study under ``results`` as
+    :func:`ttbpipe.study.outputs.aggregate_study` assesses them (also used by
+    benchmarks/tail_profile_reference.py)."""
+    paths = sorted((results / "study" / "batches").rglob("extremes_*.parquet"))
+    if not paths:
+        raise SystemExit(f"no batch files under {results}/study/batches: run the study first")
+    extremes = streaming.read_extremes(paths).sort_values(
+        ["scenario", "sample_index"], kind="stable").reset_index(drop=True)
+    section = yaml.safe_load(configfile.read_text()).get("limits")
+    raw_limits, context = limits_from_config(section)
+    limits = utilisation.assessed_limits(assessed_indices(
+        extremes.columns, outputs._assessment_metadata(paths)))
+    limits += [replace(lim, category="raw") for lim in raw_limits] if limits else raw_limits
+    return extremes, limits, context, ReliabilitySettings.from_config(section)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--results", type=Path, default=Path("results"))
     parser.add_argument("--configfile", type=Path, default=Path("config/config.yaml"))
     parser.add_argument("--rounds", type=int, default=3)
     args = parser.parse_args()
-    paths = sorted((args.results / "study" / "batches").rglob("extremes_*.parquet"))
-    if not paths:
-        raise SystemExit(f"no batch files under {args.results}/study/batches: run the study first")
-    extremes = streaming.read_extremes(paths).sort_values(
-        ["scenario", "sample_index"], kind="stable").reset_index(drop=True)
-    section = yaml.safe_load(args.configfile.read_text()).get("limits")
-    raw_limits, context = limits_from_config(section)
-    limits = utilisation.assessed_limits(assessed_indices(
-        extremes.columns, outputs._assessment_metadata(paths)))
-    limits += [replace(lim, category="raw") for lim in raw_limits] if limits else raw_limits
-    settings = ReliabilitySettings.from_config(section)
+    extremes, limits, context, settings = study_limits(args.results, args.configfile)
     times = []
     for _ in range(args.rounds):
         t0 = time.perf_counter()

@@ -315,7 +315,8 @@ def _reference_profile_ends(x, limit, settings=FAST):
     (and the estimate's shape with log scales -2..12), each by the compiled Nelder-Mead at tol
     1e-10 then scipy's Powell (an independent optimiser); each end by growing brackets and
     brentq to 1e-5 in log p. An end below 1e-30 is returned as 0 and one at 1 - 1e-12 as 1, as
-    estimate_tail reports them."""
+    estimate_tail reports them. Where the estimate is P = 0, the interval is [0, U] with U the
+    first crossing of the cutoff above P = 1e-30 (1e-30 when none is below it)."""
     centre, spread = float(np.median(x)), float(np.std(x))
     xs, zs = (x - centre) / spread, (limit - centre) / spread
     if settings.model == "pot":
@@ -348,6 +349,18 @@ def _reference_profile_ends(x, limit, settings=FAST):
             best = min(best, res.fun, polished.fun)
         return 2.0 * (best - nll_hat) - cutoff
 
+    if not np.isfinite(lp_hat):   # P = 0: the limit beyond the fitted upper end point
+        floor = np.log(1e-30)
+        if excess(floor) > 0:
+            return 0.0, 0.0, 1e-30
+        inner, step = floor, 0.25
+        while True:
+            outer = min(inner + step, np.log1p(-1e-12))
+            if excess(outer) > 0:
+                return 0.0, 0.0, np.exp(optimize.brentq(excess, inner, outer, xtol=1e-5))
+            if outer >= np.log1p(-1e-12):
+                return 0.0, 0.0, 1.0
+            inner, step = outer, 1.5 * step
     ends = []
     for direction in (-1, 1):
         inner, step = lp_hat, 0.25
@@ -387,6 +400,15 @@ def _far_limit_gpd_case(xi, distance, seed):
     return x, float(np.median(x) + distance * np.std(x))
 
 
+def _beyond_end_point_case(seed):
+    """40 maxima of a GEV with xi = -0.3 (upper end point 1.0333) and a limit 0.05 beyond that
+    end point: the fit's end point lies below the limit, the estimate is P = 0 and its interval
+    [0, U]."""
+    x = stats.genextreme.rvs(0.3, loc=1.0, scale=0.01, size=40,
+                             random_state=np.random.default_rng(seed))
+    return x, 1.0 + 0.01 / 0.3 + 0.05
+
+
 _POT_SETTINGS = TailSettings(model="pot", gof_bootstrap=0)
 
 
@@ -394,15 +416,18 @@ _POT_SETTINGS = TailSettings(model="pot", gof_bootstrap=0)
     (_FAR_LIMIT_MAXIMA, 1.0, FAST), (*_far_limit_case(0.6, 3000, 1), FAST),
     (*_far_limit_case(0.8, 300, 2), FAST), (*_far_limit_case(0.5, 1000, 2), FAST),
     (*_far_limit_gpd_case(0.8, 300, 4), _POT_SETTINGS),
-    (*_far_limit_gpd_case(0.6, 1000, 7), _POT_SETTINGS)],
-    ids=["case4_deflection", "xi0.6", "xi0.8", "xi0.5", "pot_xi0.8", "pot_xi0.6"])
+    (*_far_limit_gpd_case(0.6, 1000, 7), _POT_SETTINGS),
+    (*_beyond_end_point_case(2), FAST), (*_beyond_end_point_case(5), FAST)],
+    ids=["case4_deflection", "xi0.6", "xi0.8", "xi0.5", "pot_xi0.8", "pot_xi0.6",
+         "p0_seed2", "p0_seed5"])
 def test_profile_interval_far_beyond_the_data_equals_a_multistart_reference(x, limit, settings):
     """Limits hundreds to thousands of standard deviations above the data (20 GEV maxima; 300
-    generalised Pareto values for POT): both ends of the profile interval equal the slow
-    multi-start reference's (_reference_profile_ends) within 2e-3 in log p (Brent's tolerance
-    1e-3 plus the optimisers'); both ends 0 where the reference's is below 1e-30. A GEV profile
-    followed from the neighbouring point alone stalled at the support's edge and ended the
-    interval 200 times too low (the upper end 1.7e-5 instead of 3.2e-3 for the first case)."""
+    generalised Pareto values for POT) or beyond the fitted end point (P = 0): both ends of the
+    profile interval equal the slow multi-start reference's (_reference_profile_ends) within
+    2e-3 in log p (Brent's tolerance 1e-3 plus the optimisers'); both ends 0 where the
+    reference's is below 1e-30. A GEV profile followed from the neighbouring point alone
+    stalled at the support's edge and ended the interval 200 times too low (the upper end
+    1.7e-5 instead of 3.2e-3 for the first case)."""
     est = estimate_tail(x, limit, settings=settings)
     p_ref, low_ref, high_ref = _reference_profile_ends(x, limit, settings)
     assert est.probability == pytest.approx(p_ref, rel=1e-5)
