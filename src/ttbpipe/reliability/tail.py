@@ -294,6 +294,16 @@ def _objective(kind, x, a, above, e, xi_min, u, lp, z, v):
     return _shape_nll(base, x, a, above, e, xi_min, z - np.exp(lsig) * ratio, lsig, xi)
 
 
+@kernel
+def _objective_at(kind, x, a, above, e, xi_min, u, lp, z, points):
+    """:func:`_objective` at each row of ``points`` (the candidates of a profile point's
+    starts, :func:`_profile_starts`): one compiled loop instead of a Python call per point."""
+    out = np.empty(points.shape[0])
+    for i in range(points.shape[0]):
+        out[i] = _objective(kind, x, a, above, e, xi_min, u, lp, z, points[i])
+    return out
+
+
 #: Nelder-Mead's moves within one step (:func:`_nelder_mead`).
 _NM_REFLECT, _NM_EXPAND, _NM_OUTSIDE, _NM_INSIDE, _NM_SHRINK = 0, 1, 2, 3, 4
 
@@ -729,6 +739,11 @@ class _Objective:
         return float(_objective(self._kind, *self._data, self._lp, self._z,
                                 np.asarray(v, dtype=float)))
 
+    def at(self, points) -> np.ndarray:
+        """The objective at each row of ``points`` (the same values as calling it on each)."""
+        return _objective_at(self._kind, *self._data, self._lp, self._z,
+                             np.ascontiguousarray(points, dtype=float))
+
     def solve(self, start, tol: float, maxiter: int = _NM_MAXITER, maxfev: int = _NM_MAXFEV):
         """One compiled Nelder-Mead run from ``start`` (``xatol = fatol = tol``), as SciPy's
         ``OptimizeResult`` (x, fun, nit, nfev, status, success, message)."""
@@ -1022,9 +1037,9 @@ def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
     alone finds inside the support only short-tailed points, worse by dozens of orders of
     magnitude). An empty list: no candidate inside the support."""
     starts = [s for s in (previous, fixed) if np.isfinite(fun(s))]
-    candidates = list(grid) + [base + np.eye(base.size)[0] * raise_
-                               for base in (previous, fixed) for raise_ in _SCALE_RAISES]
-    values = [fun(s) for s in candidates]
+    candidates = np.vstack([grid] + [base + np.outer(_SCALE_RAISES, np.eye(base.size)[0])
+                                     for base in (previous, fixed)])
+    values = fun.at(candidates)
     k = int(np.argmin(values))
     if np.isfinite(values[k]):
         starts.append(candidates[k])
