@@ -91,6 +91,24 @@ def test_profile_objective_equals_the_models_from_logp():
     assert infinite > 50                       # no-solution and outside-support points exercised
 
 
+def test_objective_at_many_points_equals_the_objective_point_by_point():
+    # _Objective.at (one compiled loop over the candidates of a profile point's starts) against
+    # calling the objective on each point: the same kernel, so equal bit for bit, inf included
+    rng = np.random.default_rng(12)
+    infinite = finite = 0
+    for model in _tail_models(rng, 40):
+        z = float(np.max(model.x)) + 0.5
+        size = 1 if model.name == "Gumbel" else 2
+        points = np.column_stack([rng.normal(0.0, 2.0, 200),
+                                  rng.uniform(-0.9, 4.0, 200)])[:, :size]
+        objective = _Objective(model, profile=(rng.uniform(-25.0, -0.1), z))
+        many = objective.at(points)
+        assert np.array_equal(many, np.array([objective(p) for p in points]))
+        infinite += int(np.isinf(many).sum())
+        finite += int(np.isfinite(many).sum())
+    assert infinite > 20 and finite > 200      # points outside and inside the support exercised
+
+
 def test_compiled_nelder_mead_repeats_scipy_step_for_step():
     # the compiled simplex against SciPy's minimize(method="Nelder-Mead") on the same compiled
     # objectives: identical end point, value, iteration and evaluation counts and status (exact
