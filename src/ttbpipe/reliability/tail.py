@@ -1037,6 +1037,8 @@ def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
     alone finds inside the support only short-tailed points, worse by dozens of orders of
     magnitude). An empty list: no candidate inside the support."""
     starts = [s for s in (previous, fixed) if np.isfinite(fun(s))]
+    if len(starts) == 2 and np.array_equal(*starts):   # the first point of each end
+        starts.pop()
     candidates = np.vstack([grid] + [base + np.outer(_SCALE_RAISES, np.eye(base.size)[0])
                                      for base in (previous, fixed)])
     values = fun.at(candidates)
