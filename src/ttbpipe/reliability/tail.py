@@ -1022,10 +1022,11 @@ _SCALE_RAISES = tuple(0.25 * 2.0 ** k for k in range(8))
 
 
 def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
-    """The starting points of a profile point's Nelder-Mead runs (``fun``: its objective): the
-    previous profile point's optimum and the estimate's where they lie inside the support, and
-    the candidate of least ``fun`` among ``grid`` and those two points with their log-scale
-    raised step by step (:data:`_SCALE_RAISES`).
+    """The starting points of a profile point's Nelder-Mead runs (``fun``: its objective;
+    ``grid``: candidate points, one per row): the previous profile point's optimum and the
+    estimate's where they lie inside the support, and the candidate of least ``fun`` among
+    ``grid`` and those two points with their log-scale raised step by step
+    (:data:`_SCALE_RAISES`).
 
     Why more than the previous optimum: when the limit lies far above the data, the profile's
     minimum lies in a narrow band next to the support's edge (for xi > 0 the GEV's lower end
@@ -1039,8 +1040,8 @@ def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
     starts = [s for s in (previous, fixed) if np.isfinite(fun(s))]
     if len(starts) == 2 and np.array_equal(*starts):   # the first point of each end
         starts.pop()
-    candidates = np.vstack([grid] + [base + np.outer(_SCALE_RAISES, np.eye(base.size)[0])
-                                     for base in (previous, fixed)])
+    raise_scale = np.outer(_SCALE_RAISES, np.eye(previous.size)[0])
+    candidates = np.vstack((grid, previous + raise_scale, fixed + raise_scale))
     values = fun.at(candidates)
     k = int(np.argmin(values))
     if np.isfinite(values[k]):
@@ -1068,6 +1069,7 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
         grid += [np.array([fixed[0] + ds, xi])
                  for ds in (-2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 6.0, 9.0)
                  for xi in (-0.3, -0.15, 0.0, 0.15, 0.3, 0.6, 1.0, 2.0) if xi >= model.xi_min]
+    grid = np.array(grid)     # one array for every profile point's candidates
 
     def prof(lp):
         fun = _Objective(model, profile=(lp, z))
