@@ -1017,16 +1017,23 @@ def estimate_tail(x, limit: float, weights=None,
         n_exceedances=n_exc, return_period_ratio=ratio, notes=tuple(notes))
 
 
-#: log-scale increments of the raised starts of a profile point (:func:`_profile_starts`)
+#: how far beyond an interval end, in log p, the profile is checked from just inside it, and how
+#: many ends of one side may fail that check before the interval is given up
+#: (:func:`_profile_interval`): twice Brent's tolerance, so a true crossing lies between the two
+_END_CHECK, _END_CHECKS = 2e-3, 20
+
+#: log-scale increments of the raised starts of a profile point, and how many of the best
+#: candidates a profile point's Nelder-Mead also starts from (:func:`_profile_starts`)
 _SCALE_RAISES = tuple(0.25 * 2.0 ** k for k in range(8))
+_PROFILE_CANDIDATE_STARTS = 3
 
 
 def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
     """The starting points of a profile point's Nelder-Mead runs (``fun``: its objective;
     ``grid``: candidate points, one per row): the previous profile point's optimum and the
-    estimate's where they lie inside the support, and the candidate of least ``fun`` among
-    ``grid`` and those two points with their log-scale raised step by step
-    (:data:`_SCALE_RAISES`).
+    estimate's where they lie inside the support, and the
+    :data:`_PROFILE_CANDIDATE_STARTS` candidates of least ``fun`` among ``grid`` and those two
+    points with their log-scale raised step by step (:data:`_SCALE_RAISES`).
 
     Why more than the previous optimum: when the limit lies far above the data, the profile's
     minimum lies in a narrow band next to the support's edge (for xi > 0 the GEV's lower end
@@ -1036,29 +1043,37 @@ def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
     reaches it. As the probability at the limit grows the previous optimum leaves the support;
     a larger scale brings a point back, which is why the raised points are candidates (a grid
     alone finds inside the support only short-tailed points, worse by dozens of orders of
-    magnitude). An empty list: no candidate inside the support."""
+    magnitude). Why several candidates: the previous optimum hugs the support's edge, so a step
+    of 1e-3 in log p can already put it outside, and the simplex from the single best candidate
+    can stall at the edge too (a value several units too high, read as the interval's end).
+    An empty list: no candidate inside the support."""
     starts = [s for s in (previous, fixed) if np.isfinite(fun(s))]
     if len(starts) == 2 and np.array_equal(*starts):   # the first point of each end
         starts.pop()
     raise_scale = np.outer(_SCALE_RAISES, np.eye(previous.size)[0])
     candidates = np.vstack((grid, previous + raise_scale, fixed + raise_scale))
     values = fun.at(candidates)
-    k = int(np.argmin(values))
-    if np.isfinite(values[k]):
-        starts.append(candidates[k])
+    best = np.argsort(values, kind="stable")[:_PROFILE_CANDIDATE_STARTS]
+    starts += [candidates[k] for k in best if np.isfinite(values[k])]
     return starts
 
 
 def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
     """Both ends of ``{log p : 2 (nll_prof(log p) - nll_hat) <= cutoff}`` (Coles 2001 §2.6.6):
     bracket by growing steps from the estimate, then Brent's method to 1e-3 in log p. Each
-    profile point is the best of Nelder-Mead runs from the previous point's optimum (a
-    continuous path), the estimate's and the best of a grid (:func:`_profile_starts`); a point
-    where none of them lies inside the support is a failed search, not a crossing
-    (:class:`TailNotEstimable`). When the estimate
-    is p = 0 the upper end is approached from ``lp_top`` (log p at the largest observation)."""
+    profile point is the best of Nelder-Mead runs from the optimum at the nearest point
+    evaluated so far (a continuous path), the estimate's and the best few of a grid
+    (:func:`_profile_starts`); a point where none of them lies inside the support is a failed
+    search, not a crossing (:class:`TailNotEstimable`). When the estimate is p = 0 the upper
+    end is approached from ``lp_top`` (log p at the largest observation).
+
+    Each end is accepted only when the profile just beyond it, followed from the optimum at the
+    nearest point inside, is beyond the cutoff (:data:`_END_CHECK`). A failed minimisation can
+    only give too high a value, so a false crossing always ends the interval too early: the
+    bracket's outer point is reached by a jump of several units in log p, where the previous
+    optimum usually lies outside the support and a simplex started elsewhere can stall at the
+    support's edge. When the check fails, the search goes on outwards from there."""
     fixed = np.asarray(free_hat, float)
-    warm = [fixed]
     steps = (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)
     if fixed.size == 1:      # Gumbel: the scale is the only other parameter
         grid = [fixed + ds for ds in steps]
@@ -1071,9 +1086,21 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
                  for xi in (-0.3, -0.15, 0.0, 0.15, 0.3, 0.6, 1.0, 2.0) if xi >= model.xi_min]
     grid = np.array(grid)     # one array for every profile point's candidates
 
-    def prof(lp):
+    # log p -> (g, the profile's optimum there), over both ends
+    cache: dict[float, tuple[float, np.ndarray]] = {}
+
+    def nearest(lp, inside: bool = False) -> np.ndarray:
+        """The optimum at the evaluated point nearest ``lp`` (only among those inside the
+        interval with ``inside``), the estimate's before any: the warm start of a profile
+        point, a continuous path wherever Brent's method jumps."""
+        evaluated = [k for k, (value, _) in cache.items() if not inside or value <= 0]
+        if not evaluated:
+            return fixed
+        return cache[min(evaluated, key=lambda k: abs(k - lp))][1]
+
+    def prof(lp, start):
         fun = _Objective(model, profile=(lp, z))
-        res = fun.minimise(_profile_starts(fun, warm[-1], fixed, grid), tol=1e-6)
+        res = fun.minimise(_profile_starts(fun, start, fixed, grid), tol=1e-6)
         if res is None or not np.isfinite(res.fun):
             # Not "beyond the cutoff": the profile is finite at every p in (0, 1) (a large
             # enough scale gives every observation and the limit a positive density), so an
@@ -1082,15 +1109,12 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
             raise TailNotEstimable(
                 f"{model.name} profile likelihood: no parameters inside the support found at "
                 f"P = {np.exp(lp):.3g} at the limit; no interval")
-        warm.append(res.x)
-        return res.fun
-
-    cache: dict[float, float] = {}
+        return 2.0 * (res.fun - nll_hat) - cutoff, res.x
 
     def g(lp):
         if lp not in cache:
-            cache[lp] = 2.0 * (prof(lp) - nll_hat) - cutoff
-        return cache[lp]
+            cache[lp] = prof(lp, nearest(lp))
+        return cache[lp][0]
 
     upper_cap = np.log1p(-1e-12)
     se = np.sqrt(var_lp) if np.isfinite(var_lp) and var_lp > 0 else 1.0
@@ -1102,22 +1126,23 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
             raise TailNotEstimable("profile likelihood is not monotone near the interval's end")
         return optimize.brentq(lambda v: np.clip(g(v), -1e6, 1e6), lo_end, hi_end, xtol=1e-3)
 
-    def end(direction: int) -> float:
-        warm[:] = [fixed]
-        inner = lp_hat
-        if not np.isfinite(lp_hat):   # p_hat = 0: the lower end is 0
-            if direction < 0:
-                return _LOG_P_FLOOR
-            inner = min(lp_top, upper_cap)
-            if g(inner) > 0:          # descend from the largest observation's probability
-                step = 1.0
-                for _ in range(60):
-                    outer = max(inner - step, _LOG_P_FLOOR)
-                    if g(outer) <= 0:
-                        return brent(outer, inner)
-                    if outer <= _LOG_P_FLOOR:
-                        return _LOG_P_FLOOR   # every p above the floor is implausible
-                    inner, step = outer, step * 1.8
+    def false_crossing(lp_end, direction: int) -> float | None:
+        """None when ``lp_end`` is a crossing along a continuous path; else the point just
+        beyond it, inside the interval after all, whose cached value is then corrected and
+        every cached value beyond it dropped."""
+        beyond = lp_end + direction * _END_CHECK
+        if not _LOG_P_FLOOR < beyond < upper_cap:
+            return None
+        value, optimum = prof(beyond, nearest(lp_end, inside=True))
+        if value > 0:
+            return None
+        for lp in [k for k in cache if direction * (k - beyond) >= 0]:
+            del cache[lp]
+        cache[beyond] = (value, optimum)
+        return beyond
+
+    def bracket(inner, direction: int) -> float:
+        """The end beyond ``inner`` (inside the interval): growing steps, then Brent's method."""
         step = step0
         for _ in range(60):
             outer = inner + direction * step
@@ -1138,6 +1163,35 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
         else:
             raise TailNotEstimable("profile likelihood did not reach the cutoff")
         return brent(inner, outer)
+
+    def end(direction: int) -> float:
+        inner = lp_hat
+        lp_end = None
+        if not np.isfinite(lp_hat):   # p_hat = 0: the lower end is 0
+            if direction < 0:
+                return _LOG_P_FLOOR
+            inner = min(lp_top, upper_cap)
+            if g(inner) > 0:          # descend from the largest observation's probability
+                step = 1.0
+                for _ in range(60):
+                    outer = max(inner - step, _LOG_P_FLOOR)
+                    if g(outer) <= 0:
+                        lp_end = brent(outer, inner)
+                        break
+                    if outer <= _LOG_P_FLOOR:
+                        return _LOG_P_FLOOR   # every p above the floor is implausible
+                    inner, step = outer, step * 1.8
+                else:
+                    raise TailNotEstimable("profile likelihood did not reach the cutoff")
+        for _ in range(_END_CHECKS):
+            if lp_end is None:
+                lp_end = bracket(inner, direction)
+            inner = false_crossing(lp_end, direction)
+            if inner is None:
+                return lp_end
+            lp_end = None
+        raise TailNotEstimable(f"{model.name} profile likelihood: no crossing of the cutoff "
+                               f"confirmed along a continuous path after {_END_CHECKS} tries")
 
     low, high = end(-1), end(+1)
     low_p = 0.0 if low <= _LOG_P_FLOOR else float(np.exp(low))
