@@ -493,6 +493,26 @@ def test_profile_interval_end_is_confirmed_along_a_continuous_path():
     _assert_ends_match(est, low_ref, high_ref)
 
 
+@pytest.mark.parametrize("xi", [0.05, 0.6, 2.0])
+def test_gev_edge_starts_lie_just_inside_the_support(xi):
+    """The closed-form support bound of a GEV profile point (the lower end point below the
+    smallest observation) against the compiled profile objective: the points 1e-6 and 1e-3
+    above it in log scale are inside (finite), 1e-6 below it is outside (infinite); none for a
+    point already inside or for xi <= 0."""
+    import ttbpipe.reliability.tail as tail
+
+    x = _FAR_LIMIT_MAXIMA
+    xs, z = (x - np.median(x)) / np.std(x), (1.0 - np.median(x)) / np.std(x)
+    model, lp = _GEV(xs, np.ones_like(xs)), np.log(1e-6)
+    objective = tail._Objective(model, profile=(lp, z))
+    points = model.edge_starts(np.array([-20.0, xi]), lp, z)
+    assert len(points) == 2 and all(np.isfinite(objective(p)) for p in points)
+    bound = points[0][0] - 1e-6
+    assert not np.isfinite(objective(np.array([bound - 1e-6, xi])))
+    assert model.edge_starts(points[1] + np.array([1.0, 0.0]), lp, z) == []
+    assert model.edge_starts(np.array([-20.0, -0.1]), lp, z) == []
+
+
 def _random_far_limit_case(seed):
     """20 or 40 maxima of a GEV with a random shape in [-0.2, 0.8] and a limit 3 to 30 000
     standard deviations above their median, all drawn from ``seed``."""

@@ -54,6 +54,7 @@ rests on the assumed domain of attraction, not on the data.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -540,6 +541,26 @@ class _GEV:
     def free(self, theta):
         return np.asarray(theta[1:], dtype=float)
 
+    def edge_starts(self, free, lp: float, z: float) -> list[np.ndarray]:
+        """``free`` = (log sigma, xi) of a profile at (log p, z) moved just inside the support
+        when it lies outside: for xi > 0 the lower end point mu - sigma/xi = z - sigma
+        y^(-xi)/xi (y = -log(1 - p), from :meth:`from_logp`) must lie below the smallest
+        observation, so log sigma > log(xi (z - min x)) + xi log y; the point with its log scale
+        1e-6 and 1e-3 above that bound. Empty for xi <= 0 (no lower end point) or a point
+        already inside. Where the profile's minimum hugs that edge, the optimum of the
+        neighbouring profile point falls just outside it, and this is its nearest point inside
+        (:func:`_profile_starts`)."""
+        lsig, xi = (float(v) for v in free)
+        if not xi > _XI_ZERO or not lp < 0.0:
+            return []
+        gap = z - float(np.min(self.x))
+        if not gap > 0.0:
+            return []
+        bound = math.log(xi * gap) + xi * math.log(-math.log1p(-math.exp(lp)))
+        if lsig > bound + 1e-3:
+            return []
+        return [np.array([bound + d, xi]) for d in (1e-6, 1e-3)]
+
     def starts(self) -> list[np.ndarray]:
         """The unweighted L-moment estimate (:func:`gev_from_lmoments`) and weighted Gumbel
         moments with xi = +-0.1 (Coles 2001 §3.3.2 suggests starting near the Gumbel).
@@ -586,6 +607,10 @@ class _Gumbel(_GEV):
     """
 
     name = "Gumbel"
+
+    def edge_starts(self, free, lp: float, z: float) -> list[np.ndarray]:
+        """Empty: the Gumbel has no lower end point (:meth:`_GEV.edge_starts`)."""
+        return []
 
     def logf(self, theta) -> np.ndarray:
         mu, lsig = theta
@@ -1028,12 +1053,14 @@ _SCALE_RAISES = tuple(0.25 * 2.0 ** k for k in range(8))
 _PROFILE_CANDIDATE_STARTS = 3
 
 
-def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
+def _profile_starts(fun, previous, fixed, grid, edge=None) -> list[np.ndarray]:
     """The starting points of a profile point's Nelder-Mead runs (``fun``: its objective;
     ``grid``: candidate points, one per row): the previous profile point's optimum and the
     estimate's where they lie inside the support, and the
     :data:`_PROFILE_CANDIDATE_STARTS` candidates of least ``fun`` among ``grid`` and those two
-    points with their log-scale raised step by step (:data:`_SCALE_RAISES`).
+    points with their log-scale raised step by step (:data:`_SCALE_RAISES`). ``edge``: the
+    model's points just inside the support next to a given one (``_GEV.edge_starts``), for the
+    previous optimum and the estimate's where they lie outside.
 
     Why more than the previous optimum: when the limit lies far above the data, the profile's
     minimum lies in a narrow band next to the support's edge (for xi > 0 the GEV's lower end
@@ -1050,6 +1077,10 @@ def _profile_starts(fun, previous, fixed, grid) -> list[np.ndarray]:
     starts = [s for s in (previous, fixed) if np.isfinite(fun(s))]
     if len(starts) == 2 and np.array_equal(*starts):   # the first point of each end
         starts.pop()
+    if edge is not None:
+        for point in (previous, fixed):
+            if not np.isfinite(fun(point)):
+                starts += [s for s in edge(point) if np.isfinite(fun(s))][:1]
     raise_scale = np.outer(_SCALE_RAISES, np.eye(previous.size)[0])
     candidates = np.vstack((grid, previous + raise_scale, fixed + raise_scale))
     values = fun.at(candidates)
@@ -1100,7 +1131,9 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
 
     def prof(lp, start):
         fun = _Objective(model, profile=(lp, z))
-        res = fun.minimise(_profile_starts(fun, start, fixed, grid), tol=1e-6)
+        edge = (functools.partial(model.edge_starts, lp=lp, z=z)
+                if hasattr(model, "edge_starts") else None)
+        res = fun.minimise(_profile_starts(fun, start, fixed, grid, edge), tol=1e-6)
         if res is None or not np.isfinite(res.fun):
             # Not "beyond the cutoff": the profile is finite at every p in (0, 1) (a large
             # enough scale gives every observation and the limit a positive density), so an
