@@ -547,7 +547,7 @@ class _GEV:
         y^(-xi)/xi (y = -log(1 - p), from :meth:`from_logp`) must lie below the smallest
         observation, so log sigma > log(xi (z - min x)) + xi log y; the point with its log scale
         1e-6 and 1e-3 above that bound. Empty for xi <= 0 (no lower end point) or a point
-        already inside. Where the profile's minimum hugs that edge, the optimum of the
+        more than 1e-3 inside. Where the profile's minimum hugs that edge, the optimum of the
         neighbouring profile point falls just outside it, and this is its nearest point inside
         (:func:`_profile_starts`)."""
         lsig, xi = (float(v) for v in free)
