@@ -1048,7 +1048,8 @@ def estimate_tail(x, limit: float, weights=None,
 _END_CHECK, _END_CHECKS = 2e-3, 20
 
 #: log-scale increments of the raised starts of a profile point, and how many of the best
-#: candidates a profile point's Nelder-Mead also starts from (:func:`_profile_starts`)
+#: candidates a profile point's Nelder-Mead also starts from where the previous optimum lies
+#: outside the support (one elsewhere; :func:`_profile_starts`)
 _SCALE_RAISES = tuple(0.25 * 2.0 ** k for k in range(8))
 _PROFILE_CANDIDATE_STARTS = 3
 
@@ -1056,9 +1057,10 @@ _PROFILE_CANDIDATE_STARTS = 3
 def _profile_starts(fun, previous, fixed, grid, edge=None) -> list[np.ndarray]:
     """The starting points of a profile point's Nelder-Mead runs (``fun``: its objective;
     ``grid``: candidate points, one per row): the previous profile point's optimum and the
-    estimate's where they lie inside the support, and the
-    :data:`_PROFILE_CANDIDATE_STARTS` candidates of least ``fun`` among ``grid`` and those two
-    points with their log-scale raised step by step (:data:`_SCALE_RAISES`). ``edge``: the
+    estimate's where they lie inside the support, and the candidate of least ``fun`` among
+    ``grid`` and those two points with their log-scale raised step by step
+    (:data:`_SCALE_RAISES`), the :data:`_PROFILE_CANDIDATE_STARTS` least where the previous
+    optimum lies outside the support. ``edge``: the
     model's points just inside the support next to a given one (``_GEV.edge_starts``), for the
     previous optimum and the estimate's where they lie outside.
 
@@ -1084,7 +1086,10 @@ def _profile_starts(fun, previous, fixed, grid, edge=None) -> list[np.ndarray]:
     raise_scale = np.outer(_SCALE_RAISES, np.eye(previous.size)[0])
     candidates = np.vstack((grid, previous + raise_scale, fixed + raise_scale))
     values = fun.at(candidates)
-    best = np.argsort(values, kind="stable")[:_PROFILE_CANDIDATE_STARTS]
+    # several candidates only where the continuation broke off (the previous optimum outside
+    # the support): from inside it the path's own start is the one that reaches the minimum
+    several = not np.isfinite(fun(previous))
+    best = np.argsort(values, kind="stable")[:_PROFILE_CANDIDATE_STARTS if several else 1]
     starts += [candidates[k] for k in best if np.isfinite(values[k])]
     return starts
 
