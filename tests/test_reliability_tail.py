@@ -606,9 +606,9 @@ def _nested_profile_ends(x, limit):
                                  np.linspace(1.0, 5.0 - 1e-6, 60)[1:]))
         values = np.array([inner(lp, s) for s in shapes])
         k = int(np.argmin(values))
-        res = optimize.minimize_scalar(
-            lambda s: inner(lp, s), bounds=(shapes[max(k - 1, 0)], shapes[min(k + 1, shapes.size - 1)]),
-            method="bounded", options={"xatol": 1e-9})
+        bounds = (shapes[max(k - 1, 0)], shapes[min(k + 1, shapes.size - 1)])
+        res = optimize.minimize_scalar(lambda s: inner(lp, s), bounds=bounds, method="bounded",
+                                       options={"xatol": 1e-9})
         return min(res.fun, values[k])
 
     cutoff = stats.chi2.ppf(0.95, 1)
