@@ -699,6 +699,11 @@ class _POT:
     def free(self, theta):
         return np.asarray(theta[1:], dtype=float)
 
+    def edge_starts(self, free, lp: float, z: float) -> list[np.ndarray]:
+        """Empty: the GPD's profile points are not moved to its upper end point (xi < 0); the
+        raised-scale candidates of :func:`_profile_starts` bring them back inside."""
+        return []
+
     def starts(self) -> list[np.ndarray]:
         """scipy's unweighted GPD fit (``c = xi``, location 0) and the weighted method of moments
         ``xi = (1 - m^2/s^2)/2, sigma = m (m^2/s^2 + 1)/2`` (Hosking & Wallis 1987 eq. 7)."""
@@ -1054,15 +1059,15 @@ _SCALE_RAISES = tuple(0.25 * 2.0 ** k for k in range(8))
 _PROFILE_CANDIDATE_STARTS = 3
 
 
-def _profile_starts(fun, previous, fixed, grid, edge=None) -> list[np.ndarray]:
+def _profile_starts(fun, previous, fixed, grid, edge) -> list[np.ndarray]:
     """The starting points of a profile point's Nelder-Mead runs (``fun``: its objective;
     ``grid``: candidate points, one per row): the previous profile point's optimum and the
     estimate's where they lie inside the support, and the candidate of least ``fun`` among
     ``grid`` and those two points with their log-scale raised step by step
     (:data:`_SCALE_RAISES`), the :data:`_PROFILE_CANDIDATE_STARTS` least where the previous
-    optimum lies outside the support. ``edge``: the
-    model's points just inside the support next to a given one (``_GEV.edge_starts``), for the
-    previous optimum and the estimate's where they lie outside.
+    optimum lies outside the support. ``edge``: the model's points just inside the support next
+    to a given one (the models' ``edge_starts``), for the previous optimum and the estimate's
+    where they lie outside.
 
     Why more than the previous optimum: when the limit lies far above the data, the profile's
     minimum lies in a narrow band next to the support's edge (for xi > 0 the GEV's lower end
@@ -1076,20 +1081,20 @@ def _profile_starts(fun, previous, fixed, grid, edge=None) -> list[np.ndarray]:
     of 1e-3 in log p can already put it outside, and the simplex from the single best candidate
     can stall at the edge too (a value several units too high, read as the interval's end).
     An empty list: no candidate inside the support."""
-    starts = [s for s in (previous, fixed) if np.isfinite(fun(s))]
+    given = [(point, bool(np.isfinite(fun(point)))) for point in (previous, fixed)]
+    starts = [point for point, inside in given if inside]
     if len(starts) == 2 and np.array_equal(*starts):   # the first point of each end
         starts.pop()
-    if edge is not None:
-        for point in (previous, fixed):
-            if not np.isfinite(fun(point)):
-                starts += [s for s in edge(point) if np.isfinite(fun(s))][:1]
+    for point, inside in given:
+        if not inside:
+            starts += [s for s in edge(point) if np.isfinite(fun(s))][:1]
     raise_scale = np.outer(_SCALE_RAISES, np.eye(previous.size)[0])
     candidates = np.vstack((grid, previous + raise_scale, fixed + raise_scale))
     values = fun.at(candidates)
     # several candidates only where the continuation broke off (the previous optimum outside
     # the support): from inside it the path's own start is the one that reaches the minimum
-    several = not np.isfinite(fun(previous))
-    best = np.argsort(values, kind="stable")[:_PROFILE_CANDIDATE_STARTS if several else 1]
+    previous_inside = given[0][1]
+    best = np.argsort(values, kind="stable")[:1 if previous_inside else _PROFILE_CANDIDATE_STARTS]
     starts += [candidates[k] for k in best if np.isfinite(values[k])]
     return starts
 
@@ -1136,8 +1141,7 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
 
     def prof(lp, start):
         fun = _Objective(model, profile=(lp, z))
-        edge = (functools.partial(model.edge_starts, lp=lp, z=z)
-                if hasattr(model, "edge_starts") else None)
+        edge = functools.partial(model.edge_starts, lp=lp, z=z)
         res = fun.minimise(_profile_starts(fun, start, fixed, grid, edge), tol=1e-6)
         if res is None or not np.isfinite(res.fun):
             # Not "beyond the cutoff": the profile is finite at every p in (0, 1) (a large
