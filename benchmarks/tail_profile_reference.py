@@ -13,6 +13,17 @@ Powell) and prints the rows whose ends differ from the table's by more than 2e-3
 the largest difference. ``--old``: another reliability table of the same study (an older
 revision's), compared the same way. About 0.15 s a row. Nothing asserted (the test asserts
 eight such cases).
+
+``--every-fit``: every profile interval the table's tail fits compute (weighted or not, GEV or
+Gumbel, P = 0 included; the table rebuilt from the batches with the code on the path, each call
+of `ttbpipe.reliability.tail._profile_interval` recorded) against the nested one-dimensional
+searches of tests/test_reliability_tail.py (`_nested_profile_interval`: the scale as the support
+edge's plus e^t, with the call's own data, weights, cutoff and maximum likelihood). A failed
+minimisation gives too high a profile value, so a search can only end an interval too early:
+an end of the code's inside the reference's by more than 2e-3 in log P is a fault of the code
+(``narrower``). Where the code's end lies beyond the reference's, the code's own profile optimum
+halfway between the two is re-evaluated with the reference's likelihood: inside the support and
+below the cutoff, it proves the reference stalled there (``reference stalled``). Seconds a row.
 """
 
 from __future__ import annotations
@@ -29,7 +40,8 @@ from study_reliability_time import study_limits
 from ttbpipe.stats.limits import ConstantLimit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_reliability_tail import _reference_profile_ends  # noqa: E402
+from test_reliability_tail import (_gev_nll_at, _nested_profile_interval,  # noqa: E402
+                                   _reference_profile_ends)
 
 
 def log_difference(got: float, ref: float) -> float:
@@ -47,7 +59,12 @@ def main() -> None:
     parser.add_argument("--old", type=Path, help="another reliability.parquet of the same study")
     parser.add_argument("--configfile", type=Path, default=Path("config/config.yaml"),
                         help="the configuration whose limits the study assessed")
+    parser.add_argument("--every-fit", action="store_true",
+                        help="every profile interval of the rebuilt table against the nested reference")
     args = parser.parse_args()
+    if args.every_fit:
+        every_fit(args.results, args.configfile)
+        return
     table = pd.read_parquet(args.results / "study/reliability.parquet")
     old = pd.read_parquet(args.old) if args.old else None
     extremes, limits, _, _ = study_limits(args.results, args.configfile)
@@ -78,6 +95,95 @@ def main() -> None:
                             for name, (lo, hi) in found.items()))
     print(f"{rows} rows: largest |log P| difference of an interval end, table {worst['table']:.2g}"
           + (f", old {worst['old']:.2g}" if old is not None else ""))
+
+
+def recorded_profile_intervals(results: Path, configfile: Path) -> list[dict]:
+    """Every `_profile_interval` call of the study's reliability table rebuilt with the code on
+    the path: the model, the standardised limit, the estimate, the cutoff and the ends found."""
+    import ttbpipe.reliability.tail as tail
+    from ttbpipe.stats.reliability import assess_limits
+
+    calls = []
+    profile_interval = tail._profile_interval
+
+    def record(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
+        ends = profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
+        calls.append(dict(model=model, z=z, lp_hat=lp_hat, free_hat=np.asarray(free_hat, float),
+                          nll_hat=nll_hat, cutoff=cutoff, lp_top=lp_top, ends=ends))
+        return ends
+
+    extremes, limits, context, settings = study_limits(results, configfile)
+    tail._profile_interval = record
+    try:
+        assess_limits(extremes, limits, context, settings, workers=1)
+    finally:
+        tail._profile_interval = profile_interval
+    return calls
+
+
+def code_profile_point(call: dict, lp: float) -> np.ndarray:
+    """The code's own profile optimum (log sigma[, xi]) at ``lp``, searched as its interval
+    search does from the estimate (`_profile_starts` with its grid)."""
+    import functools
+
+    import ttbpipe.reliability.tail as tail
+
+    model, fixed = call["model"], call["free_hat"]
+    objective = tail._Objective(model, profile=(lp, call["z"]))
+    if fixed.size == 1:
+        grid = np.array([fixed + ds for ds in (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)])
+    else:
+        grid = np.array([[fixed[0] + ds, xi] for ds in (-2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 6.0, 9.0)
+                         for xi in (-0.3, -0.15, 0.0, 0.15, 0.3, 0.6, 1.0, 2.0)
+                         if xi >= model.xi_min])
+    edge = functools.partial(model.edge_starts, lp=lp, z=call["z"])
+    return objective.minimise(tail._profile_starts(objective, fixed, fixed, grid, edge),
+                              tol=1e-6).x
+
+
+def every_fit(results: Path, configfile: Path) -> None:
+    """``--every-fit``: see the module's docstring."""
+    calls = recorded_profile_intervals(results, configfile)
+    counts = {"agree": 0, "narrower": 0, "reference stalled": 0, "unresolved": 0}
+    worst_narrower = 0.0
+    for k, call in enumerate(calls):
+        model = call["model"]
+        gumbel = model.name == "Gumbel"
+        if model.name not in ("GEV", "Gumbel"):
+            continue
+        ref = _nested_profile_interval(model.x, call["z"], call["lp_hat"], call["nll_hat"],
+                                       call["cutoff"], weights=model.a, shape_min=model.xi_min,
+                                       gumbel=gumbel, lp_top=call["lp_top"])
+        verdicts = []
+        for side, got, want in (("lower", call["ends"][0], ref[0]),
+                                ("upper", call["ends"][1], ref[1])):
+            d = log_difference(got, want)
+            if d <= 2e-3:
+                continue
+            # the code's end inside the reference's: the interval too narrow
+            inside = (got > want) if side == "lower" else (got < want)
+            if inside:
+                verdicts.append(f"narrower {side} {got:.3e} vs {want:.3e}")
+                counts["narrower"] += 1
+                worst_narrower = max(worst_narrower, d)
+                continue
+            log_ends = [np.log(max(v, 1e-30)) for v in (got, want)]
+            lp = 0.5 * sum(log_ends)
+            point = code_profile_point(call, lp)
+            log_scale, shape = (point[0], 0.0) if gumbel else point
+            value = float(_gev_nll_at(model.x, lp, call["z"], np.array([log_scale]), shape,
+                                      model.a)[0])
+            excess = 2.0 * (value - call["nll_hat"]) - call["cutoff"]
+            verdict = "reference stalled" if excess <= 0 else "unresolved"
+            counts[verdict] += 1
+            verdicts.append(f"{verdict} {side} {got:.3e} vs {want:.3e} (code's point at log P "
+                            f"{lp:.2f}: {excess:+.3f} against the cutoff)")
+        if not verdicts:
+            counts["agree"] += 1
+        else:
+            print(f"fit {k} ({model.name}, {model.x.size} maxima): " + "; ".join(verdicts))
+    print(f"{len(calls)} profile intervals: " + ", ".join(f"{v} {n}" for n, v in counts.items())
+          + (f"; largest narrower end {worst_narrower:.2g} in log P" if counts["narrower"] else ""))
 
 
 if __name__ == "__main__":
