@@ -123,22 +123,17 @@ def recorded_profile_intervals(results: Path, configfile: Path) -> list[dict]:
 
 def code_profile_point(call: dict, lp: float) -> np.ndarray:
     """The code's own profile optimum (log sigma[, xi]) at ``lp``, searched as its interval
-    search does from the estimate (`_profile_starts` with its grid)."""
+    search does from the estimate (`_profile_starts` with `_profile_grid`, `_along_edge`)."""
     import functools
 
     import ttbpipe.reliability.tail as tail
 
     model, fixed = call["model"], call["free_hat"]
     objective = tail._Objective(model, profile=(lp, call["z"]))
-    if fixed.size == 1:
-        grid = np.array([fixed + ds for ds in (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)])
-    else:
-        grid = np.array([[fixed[0] + ds, xi] for ds in (-2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 6.0, 9.0)
-                         for xi in (-0.3, -0.15, 0.0, 0.15, 0.3, 0.6, 1.0, 2.0)
-                         if xi >= model.xi_min])
     edge = functools.partial(model.edge_starts, lp=lp, z=call["z"])
-    return objective.minimise(tail._profile_starts(objective, fixed, fixed, grid, edge),
-                              tol=1e-6).x
+    starts = tail._profile_starts(objective, fixed, fixed, tail._profile_grid(fixed, model.xi_min),
+                                  edge)
+    return tail._along_edge(model, lp, call["z"], objective.minimise(starts, tol=1e-6)).x
 
 
 def every_fit(results: Path, configfile: Path) -> None:

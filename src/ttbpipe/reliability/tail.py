@@ -1177,6 +1177,22 @@ def _along_edge(model, lp: float, z: float, res):
                                    success=polished.success, message=polished.message)
 
 
+def _profile_grid(fixed: np.ndarray, xi_min: float) -> np.ndarray:
+    """The candidate starts of every profile point (one per row; :func:`_profile_starts`)
+    around the estimate's free parameters ``fixed``: its scale moved by -3 .. 2 in log, and for
+    the GEV and the GPD also shapes -0.3 .. 2 (those >= ``xi_min``) at scales up to e^9 times
+    the estimate's: a short-tailed shape with a large scale is where a start reaches the
+    profile's narrow band from outside."""
+    steps = (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)
+    if fixed.size == 1:      # Gumbel: the scale is the only other parameter
+        return np.array([fixed + ds for ds in steps])
+    grid = [fixed + np.array([ds, 0.0]) for ds in steps]
+    grid += [np.array([fixed[0] + ds, xi])
+             for ds in (-2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 6.0, 9.0)
+             for xi in (-0.3, -0.15, 0.0, 0.15, 0.3, 0.6, 1.0, 2.0) if xi >= xi_min]
+    return np.array(grid)
+
+
 def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
     """Both ends of ``{log p : 2 (nll_prof(log p) - nll_hat) <= cutoff}`` (Coles 2001 §2.6.6):
     bracket by growing steps from the estimate, then Brent's method to 1e-3 in log p. Each
@@ -1193,17 +1209,7 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
     optimum usually lies outside the support and a simplex started elsewhere can stall at the
     support's edge. When the check fails, the search goes on outwards from there."""
     fixed = np.asarray(free_hat, float)
-    steps = (-3.0, -2.0, -1.0, -0.5, 0.5, 1.0, 2.0)
-    if fixed.size == 1:      # Gumbel: the scale is the only other parameter
-        grid = [fixed + ds for ds in steps]
-    else:
-        grid = [fixed + np.array([ds, 0.0]) for ds in steps]
-        # scales up to e^9 times the estimate's: a short-tailed shape with a large scale is
-        # where a start reaches the profile's narrow band from outside (_profile_starts)
-        grid += [np.array([fixed[0] + ds, xi])
-                 for ds in (-2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 6.0, 9.0)
-                 for xi in (-0.3, -0.15, 0.0, 0.15, 0.3, 0.6, 1.0, 2.0) if xi >= model.xi_min]
-    grid = np.array(grid)     # one array for every profile point's candidates
+    grid = _profile_grid(fixed, model.xi_min)
 
     # log p -> (g, the profile's optimum there), over both ends
     cache: dict[float, tuple[float, np.ndarray]] = {}
