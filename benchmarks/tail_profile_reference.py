@@ -139,12 +139,16 @@ def code_profile_point(call: dict, lp: float) -> np.ndarray:
 def every_fit(results: Path, configfile: Path) -> None:
     """``--every-fit``: see the module's docstring."""
     calls = recorded_profile_intervals(results, configfile)
-    counts = {"agree": 0, "narrower": 0, "reference stalled": 0, "unresolved": 0}
+    # intervals whose both ends agree, intervals of models the reference does not cover (the
+    # GPD), and ends by verdict
+    counts = {"intervals agreeing": 0, "GPD intervals not checked": 0, "ends narrower": 0,
+              "ends where the reference stalled": 0, "ends unresolved": 0}
     worst_narrower = 0.0
     for k, call in enumerate(calls):
         model = call["model"]
         gumbel = model.name == "Gumbel"
         if model.name not in ("GEV", "Gumbel"):
+            counts["GPD intervals not checked"] += 1
             continue
         ref = _nested_profile_interval(model.x, call["z"], call["lp_hat"], call["nll_hat"],
                                        call["cutoff"], weights=model.a, shape_min=model.xi_min,
@@ -159,7 +163,7 @@ def every_fit(results: Path, configfile: Path) -> None:
             inside = (got > want) if side == "lower" else (got < want)
             if inside:
                 verdicts.append(f"narrower {side} {got:.3e} vs {want:.3e}")
-                counts["narrower"] += 1
+                counts["ends narrower"] += 1
                 worst_narrower = max(worst_narrower, d)
                 continue
             log_ends = [np.log(max(v, 1e-30)) for v in (got, want)]
@@ -170,15 +174,16 @@ def every_fit(results: Path, configfile: Path) -> None:
                                       model.a)[0])
             excess = 2.0 * (value - call["nll_hat"]) - call["cutoff"]
             verdict = "reference stalled" if excess <= 0 else "unresolved"
-            counts[verdict] += 1
+            counts["ends where the reference stalled" if excess <= 0 else "ends unresolved"] += 1
             verdicts.append(f"{verdict} {side} {got:.3e} vs {want:.3e} (code's point at log P "
                             f"{lp:.2f}: {excess:+.3f} against the cutoff)")
         if not verdicts:
-            counts["agree"] += 1
+            counts["intervals agreeing"] += 1
         else:
             print(f"fit {k} ({model.name}, {model.x.size} maxima): " + "; ".join(verdicts))
     print(f"{len(calls)} profile intervals: " + ", ".join(f"{v} {n}" for n, v in counts.items())
-          + (f"; largest narrower end {worst_narrower:.2g} in log P" if counts["narrower"] else ""))
+          + (f"; largest narrower end {worst_narrower:.2g} in log P"
+             if counts["ends narrower"] else ""))
 
 
 if __name__ == "__main__":
