@@ -14,7 +14,9 @@ both kinds of case and the counts. About 0.3 s a case. Nothing asserted (the tes
 such cases). Run with ``PYTHONPATH=<another tree>/src`` to check another revision's search.
 ``--reference nested``: against the nested one-dimensional searches along the support's edge
 of the same module instead (`_nested_profile_ends`, unweighted MLE by scipy's Powell; a few
-seconds a case).
+seconds a case). ``--model pot``: the POT model on random far-limit generalised Pareto samples
+(`_random_far_limit_gpd_case`: 100 or 300 values, shape -0.3 to 0.8, the limit 2 to 1 000
+standard deviations out) against the multi-start reference.
 """
 
 from __future__ import annotations
@@ -28,8 +30,9 @@ import numpy as np
 from ttbpipe.reliability.tail import TailNotEstimable, estimate_tail
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_reliability_tail import (FAST, _nested_profile_ends,  # noqa: E402
-                                   _random_far_limit_case, _reference_profile_ends)
+from test_reliability_tail import (_POT_SETTINGS, FAST, _nested_profile_ends,  # noqa: E402
+                                   _random_far_limit_case, _random_far_limit_gpd_case,
+                                   _reference_profile_ends)
 
 _TOLERANCE = 2e-3   # in log P: Brent's tolerance 1e-3 plus the optimisers'
 
@@ -38,17 +41,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs=2, default=(0, 600), metavar=("FIRST", "END"))
     parser.add_argument("--reference", choices=("multistart", "nested"), default="multistart")
+    parser.add_argument("--model", choices=("gev", "pot"), default="gev")
     args = parser.parse_args()
+    if args.model == "pot" and args.reference == "nested":
+        parser.error("the nested reference is the GEV's")
+    settings = _POT_SETTINGS if args.model == "pot" else FAST
+    case = _random_far_limit_gpd_case if args.model == "pot" else _random_far_limit_case
     counts = {"cases": 0, "narrower": 0, "wider": 0, "not estimable": 0}
     for seed in range(*args.seeds):
-        x, limit = _random_far_limit_case(seed)
+        x, limit = case(seed)
         try:
-            est = estimate_tail(x, limit, settings=FAST)
-        except TailNotEstimable:
+            est = estimate_tail(x, limit, settings=settings)
+            _, low, high = (_nested_profile_ends(x, limit) if args.reference == "nested" else
+                            _reference_profile_ends(x, limit, settings))
+        except TailNotEstimable:     # the estimate (or the reference's fit) not estimable
             counts["not estimable"] += 1
             continue
-        _, low, high = (_nested_profile_ends(x, limit) if args.reference == "nested" else
-                        _reference_profile_ends(x, limit, FAST))
         counts["cases"] += 1
         narrower = (est.ci_high < high * np.exp(-_TOLERANCE)
                     or (low > 0 and est.ci_low > low * np.exp(_TOLERANCE)))

@@ -553,6 +553,17 @@ def _random_far_limit_case(seed):
     return x, float(np.median(x) + distance * np.std(x))
 
 
+def _random_far_limit_gpd_case(seed):
+    """100 or 300 generalised Pareto values with a random shape in [-0.3, 0.8] and a limit 2 to
+    1 000 standard deviations above their median (the POT model's family of
+    benchmarks/tail_profile_random_cases.py), all drawn from ``seed``."""
+    rng = np.random.default_rng(10_000 + seed)
+    xi, distance = rng.uniform(-0.3, 0.8), 10 ** rng.uniform(0.3, 3.0)
+    n = int(rng.choice([100, 300]))
+    x = stats.genpareto.rvs(xi, size=n, random_state=rng)
+    return x, float(np.median(x) + distance * np.std(x))
+
+
 @pytest.mark.parametrize("seed", [5, 124, 225, 228, 255])
 def test_profile_interval_contains_the_multistart_reference(seed):
     """Random far-limit cases on which the profile search from the single best start ended
