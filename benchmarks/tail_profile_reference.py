@@ -23,7 +23,9 @@ minimisation gives too high a profile value, so a search can only end an interva
 an end of the code's inside the reference's by more than 2e-3 in log P is a fault of the code
 (``narrower``). Where the code's end lies beyond the reference's, the code's own profile optimum
 halfway between the two is re-evaluated with the reference's likelihood: inside the support and
-below the cutoff, it proves the reference stalled there (``reference stalled``). Seconds a row.
+below the cutoff, it proves the reference stalled there (``reference stalled``). The time grows
+with the number of maxima: case 4's 396 intervals of 20 maxima 10 minutes, case 3's medium
+variant's 56 of 300 maxima 4 minutes.
 """
 
 from __future__ import annotations
