@@ -751,6 +751,30 @@ def test_profile_interval_equals_a_second_reference_along_the_support_edge(seed)
     _assert_ends_match(est, low_ref, high_ref)
 
 
+def _weighted_far_limit_case(xi, distance, seed):
+    """60 GEV maxima with log-normal weights and a limit ``distance`` standard deviations out."""
+    rng = np.random.default_rng(seed)
+    x = stats.genextreme.rvs(-xi, loc=1.0, scale=0.01, size=60, random_state=rng)
+    return x, float(np.median(x) + distance * np.std(x)), rng.lognormal(0.0, 0.5, 60)
+
+
+def _record_profile_interval(monkeypatch) -> dict:
+    """The arguments of the next tail._profile_interval call (the model, the standardised limit,
+    the estimate, its maximum likelihood and the cutoff the code used), filled in as it runs."""
+    import ttbpipe.reliability.tail as tail
+
+    used = {}
+    profile_interval = tail._profile_interval
+
+    def record(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
+        used.update(model=model, z=z, lp_hat=lp_hat, nll_hat=nll_hat, cutoff=cutoff,
+                    lp_top=lp_top)
+        return profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
+
+    monkeypatch.setattr(tail, "_profile_interval", record)
+    return used
+
+
 @pytest.mark.parametrize("xi, distance, seed", [(0.6, 3000, 1), (0.3, 30, 3), (0.0, 10, 4)])
 def test_weighted_profile_interval_equals_the_multistart_reference(xi, distance, seed, monkeypatch):
     """Weighted GEV fits (60 maxima, log-normal weights) with limits far above the data: both
@@ -758,31 +782,12 @@ def test_weighted_profile_interval_equals_the_multistart_reference(xi, distance,
     2e-3 in log p. The reference is given the code's own sandwich-scaled cutoff (captured
     from tail._profile_interval): what is checked here is the profile search, the sandwich
     ratio has its own tests (test_importance_weights_recover_target_tail)."""
-    import ttbpipe.reliability.tail as tail
-
-    rng = np.random.default_rng(seed)
-    x = stats.genextreme.rvs(-xi, loc=1.0, scale=0.01, size=60, random_state=rng)
-    weights = rng.lognormal(0.0, 0.5, 60)
-    limit = float(np.median(x) + distance * np.std(x))
-    used = {}
-    profile_interval = tail._profile_interval
-
-    def capture(model, z, lp_hat, free_hat, nll_hat, cutoff, *args):
-        used["cutoff"] = cutoff
-        return profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, *args)
-
-    monkeypatch.setattr(tail, "_profile_interval", capture)
+    x, limit, weights = _weighted_far_limit_case(xi, distance, seed)
+    used = _record_profile_interval(monkeypatch)
     est = estimate_tail(x, limit, weights=weights, settings=FAST)
     assert "sandwich-adjusted" in est.method and est.probability > 0
     _, low_ref, high_ref = _reference_profile_ends(x, limit, FAST, weights, used["cutoff"])
     _assert_ends_match(est, low_ref, high_ref)
-
-
-def _weighted_far_limit_case(xi, distance, seed):
-    """60 GEV maxima with log-normal weights and a limit ``distance`` standard deviations out."""
-    rng = np.random.default_rng(seed)
-    x = stats.genextreme.rvs(-xi, loc=1.0, scale=0.01, size=60, random_state=rng)
-    return x, float(np.median(x) + distance * np.std(x)), rng.lognormal(0.0, 0.5, 60)
 
 
 @pytest.mark.parametrize("x, limit, weights", [
@@ -797,17 +802,7 @@ def test_weighted_and_zero_estimate_intervals_equal_the_nested_reference(x, limi
     reference given the standardised data, weights, limit, maximum likelihood and
     (sandwich-scaled) cutoff the code used, captured from tail._profile_interval: a second
     method for what the multi-start reference checks in the tests above."""
-    import ttbpipe.reliability.tail as tail
-
-    used = {}
-    profile_interval = tail._profile_interval
-
-    def capture(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
-        used.update(model=model, z=z, lp_hat=lp_hat, nll_hat=nll_hat, cutoff=cutoff,
-                    lp_top=lp_top)
-        return profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
-
-    monkeypatch.setattr(tail, "_profile_interval", capture)
+    used = _record_profile_interval(monkeypatch)
     est = estimate_tail(x, limit, weights=weights, settings=FAST)
     assert (est.probability == 0.0) == (weights is None)
     model = used["model"]

@@ -554,48 +554,48 @@ class _GEV:
     def free(self, theta):
         return np.asarray(theta[1:], dtype=float)
 
+    def _edge_bound(self, xi: float, lp: float, z: float) -> float | None:
+        """The support's edge of a profile point at (log p, z) with shape xi > 0: its lower end
+        point mu - sigma/xi = z - sigma y^(-xi)/xi (y = -log(1 - p), from :meth:`from_logp`)
+        must lie below the smallest observation, so log sigma > log(xi (z - min x)) + xi log y,
+        this bound (the same operations as the compiled objective
+        :data:`_GEV_PROFILE_ALONG_EDGE`). None for xi <= 0 (no lower end point), p >= 1 or a
+        limit not above the data."""
+        gap = z - float(np.min(self.x))
+        if not (xi > _XI_ZERO and lp < 0.0 and gap > 0.0):
+            return None
+        return math.log(xi * gap) + xi * math.log(-math.log1p(-math.exp(lp)))
+
     def edge_starts(self, free, lp: float, z: float) -> list[np.ndarray]:
         """``free`` = (log sigma, xi) of a profile at (log p, z) moved just inside the support
-        when it lies outside: for xi > 0 the lower end point mu - sigma/xi = z - sigma
-        y^(-xi)/xi (y = -log(1 - p), from :meth:`from_logp`) must lie below the smallest
-        observation, so log sigma > log(xi (z - min x)) + xi log y; the point with its log scale
-        1e-6 and 1e-3 above that bound. Empty for xi <= 0 (no lower end point) or a point
-        more than 1e-3 inside. Where the profile's minimum hugs that edge, the optimum of the
-        neighbouring profile point falls just outside it, and this is its nearest point inside
+        (:meth:`_edge_bound`) when it lies outside: the point with its log scale 1e-6 and 1e-3
+        above that bound. Empty where there is no bound or the point lies more than 1e-3
+        inside. Where the profile's minimum hugs that edge, the optimum of the neighbouring
+        profile point falls just outside it, and this is its nearest point inside
         (:func:`_profile_starts`)."""
         lsig, xi = (float(v) for v in free)
-        if not xi > _XI_ZERO or not lp < 0.0:
-            return []
-        gap = z - float(np.min(self.x))
-        if not gap > 0.0:
-            return []
-        bound = math.log(xi * gap) + xi * math.log(-math.log1p(-math.exp(lp)))
-        if lsig > bound + 1e-3:
+        bound = self._edge_bound(xi, lp, z)
+        if bound is None or lsig > bound + 1e-3:
             return []
         return [np.array([bound + d, xi]) for d in (1e-6, 1e-3)]
 
     def edge_coordinates(self, free, lp: float, z: float) -> np.ndarray | None:
         """``free`` = (log sigma, xi) of a profile point at (log p, z) as (t, xi) with log sigma
-        = b(xi) + e^t, b the bound of :meth:`edge_starts`, where it lies inside the support
-        within :data:`_EDGE_BAND` of that bound (xi > 0); else None. In these coordinates the
-        narrow band next to the edge, where far-limit profiles have their minimum, is a valley
-        of ordinary width (:func:`_along_edge`)."""
+        = b(xi) + e^t, b the bound of :meth:`_edge_bound`, where it lies inside the support
+        within :data:`_EDGE_BAND` of that bound; else None. In these coordinates the narrow
+        band next to the edge, where far-limit profiles have their minimum, is a valley of
+        ordinary width (:func:`_along_edge`)."""
         lsig, xi = (float(v) for v in free)
-        gap = z - float(np.min(self.x))
-        if not (xi > _XI_ZERO and lp < 0.0 and gap > 0.0):
+        bound = self._edge_bound(xi, lp, z)
+        if bound is None or not 0.0 < lsig - bound < _EDGE_BAND:
             return None
-        distance = lsig - (math.log(xi * gap) + xi * math.log(-math.log1p(-math.exp(lp))))
-        if not 0.0 < distance < _EDGE_BAND:
-            return None
-        return np.array([math.log(distance), xi])
+        return np.array([math.log(lsig - bound), xi])
 
     def from_edge_coordinates(self, along, lp: float, z: float) -> np.ndarray:
-        """(log sigma, xi) of the point (t, xi) of :meth:`edge_coordinates` (the same operations
-        as the compiled objective)."""
+        """(log sigma, xi) of the point (t, xi) of :meth:`edge_coordinates` (inside the
+        support: xi > 0, p < 1, the limit above the data)."""
         t, xi = (float(v) for v in along)
-        gap = z - float(np.min(self.x))
-        return np.array([math.log(xi * gap) + xi * math.log(-math.log1p(-math.exp(lp)))
-                         + math.exp(t), xi])
+        return np.array([self._edge_bound(xi, lp, z) + math.exp(t), xi])
 
     def starts(self) -> list[np.ndarray]:
         """The unweighted L-moment estimate (:func:`gev_from_lmoments`) and weighted Gumbel
