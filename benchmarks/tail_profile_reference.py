@@ -111,7 +111,7 @@ def recorded_profile_intervals(results: Path, configfile: Path) -> list[dict]:
     def record(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
         ends = profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
         calls.append(dict(model=model, z=z, lp_hat=lp_hat, free_hat=np.asarray(free_hat, float),
-                          nll_hat=nll_hat, cutoff=cutoff, lp_top=lp_top, ends=ends))
+                          nll_hat=nll_hat, cutoff=cutoff, ends=ends))
         return ends
 
     extremes, limits, context, settings = study_limits(results, configfile)
@@ -125,17 +125,12 @@ def recorded_profile_intervals(results: Path, configfile: Path) -> list[dict]:
 
 def code_profile_point(call: dict, lp: float) -> np.ndarray:
     """The code's own profile optimum (log sigma[, xi]) at ``lp``, searched as its interval
-    search does from the estimate (`_profile_starts` with `_profile_grid`, `_along_edge`)."""
-    import functools
-
+    search does, warm-started from the estimate (`ttbpipe.reliability.tail._profile_point`)."""
     import ttbpipe.reliability.tail as tail
 
     model, fixed = call["model"], call["free_hat"]
-    objective = tail._Objective(model, profile=(lp, call["z"]))
-    edge = functools.partial(model.edge_starts, lp=lp, z=call["z"])
-    starts = tail._profile_starts(objective, fixed, fixed, tail._profile_grid(fixed, model.xi_min),
-                                  edge)
-    return tail._along_edge(model, lp, call["z"], objective.minimise(starts, tol=1e-6)).x
+    return tail._profile_point(model, lp, call["z"], fixed, fixed,
+                               tail._profile_grid(fixed, model.xi_min)).x
 
 
 def every_fit(results: Path, configfile: Path) -> None:
@@ -154,7 +149,7 @@ def every_fit(results: Path, configfile: Path) -> None:
             continue
         ref = _nested_profile_interval(model.x, call["z"], call["lp_hat"], call["nll_hat"],
                                        call["cutoff"], weights=model.a, shape_min=model.xi_min,
-                                       gumbel=gumbel, lp_top=call["lp_top"])
+                                       gumbel=gumbel)
         verdicts = []
         for side, got, want in (("lower", call["ends"][0], ref[0]),
                                 ("upper", call["ends"][1], ref[1])):

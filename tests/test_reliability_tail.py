@@ -400,35 +400,47 @@ def _reference_profile_ends(x, limit, settings=FAST, weights=None, cutoff=None):
             best = min(best, res.fun, polished.fun)
         return 2.0 * (best - nll_hat) - cutoff
 
+    low, high = _interval_of(excess, lp_hat, xtol=1e-5)
+    return np.exp(lp_hat), low, high
+
+
+def _interval_of(excess, lp_hat, xtol):
+    """The ends (in p) of ``{log p : excess(log p) <= 0}`` around the estimate ``lp_hat``, the
+    two references' common end search: growing brackets (0.25, then x1.5) and brentq to
+    ``xtol`` in log p; a lower end below 1e-30 is 0 and an upper end at 1 - 1e-12 is 1, as
+    estimate_tail reports them. Where the estimate is P = 0 (``lp_hat`` -inf) the interval is [0, U] with U
+    the first crossing of the cutoff above P = 1e-30 (1e-30 when none is below it)."""
+    floor, cap = np.log(1e-30), np.log1p(-1e-12)
     if not np.isfinite(lp_hat):   # P = 0: the limit beyond the fitted upper end point
-        floor = np.log(1e-30)
         if excess(floor) > 0:
-            return 0.0, 0.0, 1e-30
+            return 0.0, 1e-30
         inner, step = floor, 0.25
         while True:
-            outer = min(inner + step, np.log1p(-1e-12))
+            outer = min(inner + step, cap)
             if excess(outer) > 0:
-                return 0.0, 0.0, np.exp(optimize.brentq(excess, inner, outer, xtol=1e-5))
-            if outer >= np.log1p(-1e-12):
-                return 0.0, 0.0, 1.0
+                return 0.0, np.exp(optimize.brentq(excess, inner, outer, xtol=xtol))
+            if outer >= cap:
+                return 0.0, 1.0
             inner, step = outer, 1.5 * step
     ends = []
     for direction in (-1, 1):
         inner, step = lp_hat, 0.25
         while True:
-            outer = min(inner + direction * step, np.log1p(-1e-12))
+            outer = min(inner + direction * step, cap)
             if excess(outer) > 0:
-                end = optimize.brentq(excess, min(inner, outer), max(inner, outer), xtol=1e-5)
-                ends.append(np.exp(end) if end >= np.log(1e-30) else 0.0)
+                end = optimize.brentq(excess, min(inner, outer), max(inner, outer), xtol=xtol)
+                # a lower end below 1e-30 is 0 (an upper one is not: an estimate below
+                # 1e-30 has its upper end there too)
+                ends.append(0.0 if direction < 0 and end < floor else np.exp(end))
                 break
-            if direction < 0 and outer < np.log(1e-30):
+            if direction < 0 and outer < floor:
                 ends.append(0.0)
                 break
-            if direction > 0 and outer >= np.log1p(-1e-12):   # P = 1 is not excluded
+            if direction > 0 and outer >= cap:   # P = 1 is not excluded
                 ends.append(1.0)
                 break
             inner, step = outer, 1.5 * step
-    return np.exp(lp_hat), ends[0], ends[1]
+    return ends[0], ends[1]
 
 
 # 20 per-passage maxima of an EN 1990 deflection utilisation (paper case 4's forecast scenario
@@ -625,14 +637,12 @@ def _nested_profile_ends(x, limit):
     mu, lsig, xi = fit.x
     nll_hat = min(fit.fun, nll([loc, np.log(scale), -c]))
     lp_hat = float(stats.genextreme.logsf(z, -xi, loc=mu, scale=np.exp(lsig)))
-    lp_top = float(stats.genextreme.logsf(xs.max(), -xi, loc=mu, scale=np.exp(lsig)))
-    low, high = _nested_profile_interval(xs, z, lp_hat, nll_hat, stats.chi2.ppf(0.95, 1),
-                                         lp_top=lp_top)
+    low, high = _nested_profile_interval(xs, z, lp_hat, nll_hat, stats.chi2.ppf(0.95, 1))
     return float(np.exp(lp_hat)), low, high
 
 
 def _nested_profile_interval(xs, z, lp_hat, nll_hat, cutoff, weights=None, shape_min=-0.5,
-                             gumbel=False, lp_top=None):
+                             gumbel=False):
     """The profile interval ``{p : 2 (profile(log p) - nll_hat) <= cutoff}`` of P(X > z) under
     a GEV of the standardised maxima ``xs`` (weighted log-likelihood with ``weights``; the
     Gumbel with ``gumbel``) by nested one-dimensional searches, independent of ttbpipe's
@@ -642,12 +652,7 @@ def _nested_profile_interval(xs, z, lp_hat, nll_hat, cutoff, weights=None, shape
     needs log sigma > log(xi (z - min x)) + xi log y (y = -log(1 - p)), and log sigma runs as
     that bound plus e^t, t from -30 to 4 (700 points, and 700 more from locations over the
     data, then bounded Brent), so the band next to the support's edge where the far-limit
-    profiles have their minimum is resolved. Each end
-    by growing brackets and brentq to 1e-4; an end below 1e-30 is returned as 0 and one at
-    1 - 1e-12 as 1. Where the estimate is P = 0 (``lp_hat`` -inf) the interval is [0, U], U
-    the crossing found descending from ``lp_top`` (log P at the largest observation), as
-    estimate_tail searches it."""
-    floor, cap = np.log(1e-30), np.log1p(-1e-12)
+    profiles have their minimum is resolved. The ends by :func:`_interval_of` to 1e-4."""
 
     def grid(lp, xi, points=700):
         """2 ``points`` values of t, sorted, and the map t -> log sigma at shape xi: ``points``
@@ -705,35 +710,7 @@ def _nested_profile_interval(xs, z, lp_hat, nll_hat, cutoff, weights=None, shape
                                        options={"xatol": 1e-9})
         return min(res.fun, refined[k])
 
-    excess = lambda lp: 2.0 * (profile(lp) - nll_hat) - cutoff  # noqa: E731
-    if not np.isfinite(lp_hat):       # P = 0: [0, U]
-        lp = min(lp_top, cap)
-        step = 1.0 if excess(lp) > 0 else -0.25
-        while True:
-            other = min(max(lp - step, floor), cap)
-            if (excess(other) <= 0) == (step > 0):
-                lo_lp, hi_lp = min(lp, other), max(lp, other)
-                return 0.0, float(np.exp(optimize.brentq(excess, lo_lp, hi_lp, xtol=1e-4)))
-            if other in (floor, cap):      # no crossing above 1e-30 (or below 1 - 1e-12)
-                return 0.0, (1e-30 if other == floor else 1.0)
-            lp, step = other, 1.6 * step
-    ends = []
-    for direction, limit in ((-1, floor), (1, cap)):
-        inner_lp, step = lp_hat, 0.25
-        while True:
-            outer = inner_lp + direction * step
-            if direction * (outer - limit) >= 0:
-                outer = limit
-                if excess(outer) <= 0:
-                    ends.append(0.0 if direction < 0 else 1.0)
-                    break
-            if excess(outer) > 0:
-                ends.append(float(np.exp(optimize.brentq(excess, min(inner_lp, outer),
-                                                         max(inner_lp, outer), xtol=1e-4))))
-                break
-            inner_lp, step = outer, 1.5 * step
-    # as estimate_tail reports an end below 1e-30 (an estimate below it has such a lower end)
-    return (0.0 if ends[0] < 1e-30 else ends[0]), ends[1]
+    return _interval_of(lambda lp: 2.0 * (profile(lp) - nll_hat) - cutoff, lp_hat, xtol=1e-4)
 
 
 @pytest.mark.parametrize("seed", [5, 21, 66, 531, 588])
@@ -767,8 +744,7 @@ def _record_profile_interval(monkeypatch) -> dict:
     profile_interval = tail._profile_interval
 
     def record(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
-        used.update(model=model, z=z, lp_hat=lp_hat, nll_hat=nll_hat, cutoff=cutoff,
-                    lp_top=lp_top)
+        used.update(model=model, z=z, lp_hat=lp_hat, nll_hat=nll_hat, cutoff=cutoff)
         return profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
 
     monkeypatch.setattr(tail, "_profile_interval", record)
@@ -808,7 +784,7 @@ def test_weighted_and_zero_estimate_intervals_equal_the_nested_reference(x, limi
     model = used["model"]
     low_ref, high_ref = _nested_profile_interval(
         model.x, used["z"], used["lp_hat"], used["nll_hat"], used["cutoff"], weights=model.a,
-        shape_min=model.xi_min, lp_top=used["lp_top"])
+        shape_min=model.xi_min)
     _assert_ends_match(est, low_ref, high_ref)
 
 

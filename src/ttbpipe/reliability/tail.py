@@ -1177,6 +1177,17 @@ def _along_edge(model, lp: float, z: float, res):
                                    success=polished.success, message=polished.message)
 
 
+def _profile_point(model, lp: float, z: float, start, fixed, grid):
+    """The Nelder-Mead result (None: no start inside the support) of one profile point at
+    (log p, z): the runs from the starts of :func:`_profile_starts` (``start``: the warm start,
+    ``fixed``: the estimate's free parameters, ``grid``: :func:`_profile_grid`'s candidates),
+    followed along the support's edge where the optimum lies next to it (:func:`_along_edge`)."""
+    fun = _Objective(model, profile=(lp, z))
+    edge = functools.partial(model.edge_starts, lp=lp, z=z)
+    return _along_edge(model, lp, z,
+                       fun.minimise(_profile_starts(fun, start, fixed, grid, edge), tol=1e-6))
+
+
 def _profile_grid(fixed: np.ndarray, xi_min: float) -> np.ndarray:
     """The candidate starts of every profile point (one per row; :func:`_profile_starts`)
     around the estimate's free parameters ``fixed``: its scale moved by -3 .. 2 in log, and for
@@ -1224,10 +1235,7 @@ def _profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_to
         return cache[min(evaluated, key=lambda k: abs(k - lp))][1]
 
     def prof(lp, start):
-        fun = _Objective(model, profile=(lp, z))
-        edge = functools.partial(model.edge_starts, lp=lp, z=z)
-        res = _along_edge(model, lp, z,
-                          fun.minimise(_profile_starts(fun, start, fixed, grid, edge), tol=1e-6))
+        res = _profile_point(model, lp, z, start, fixed, grid)
         if res is None or not np.isfinite(res.fun):
             # Not "beyond the cutoff": the profile is finite at every p in (0, 1) (a large
             # enough scale gives every observation and the limit a positive density), so an
