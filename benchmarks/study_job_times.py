@@ -9,7 +9,11 @@ jobs it also reads each batch's own log (``--root``: the folder the study ran in
 job's wall time into the part the batch logged (first to last log line: field set-up, runs,
 assessment, writing) and the part before and after it (interpreter start, imports, Snakemake's
 script preamble), and sums the coupled runs' own wall times ("coupled run done: X s wall"):
-the rest is the workflow's overhead around the runs. Timings only; compare runs made side by side on the same machine.
+the rest is the workflow's overhead around the runs. When the log also holds the report of
+``/usr/bin/time -v`` (``/usr/bin/time -v snakemake --cores 2 2> run.err``: its lines follow
+Snakemake's own), it also prints that share of the run's CPU time (user + system of Snakemake and
+every job), the measure of the workflow target in docs/performance.md. Timings only; compare runs
+made side by side on the same machine.
 """
 
 from __future__ import annotations
@@ -46,12 +50,20 @@ def coupled_run_seconds(batch_log_text: str) -> float:
     return sum(float(t) for t in re.findall(r"coupled run done: ([\d.]+) s wall", batch_log_text))
 
 
+def cpu_seconds(log_text: str) -> float | None:
+    """User plus system seconds of ``/usr/bin/time -v``'s report in the log, or None."""
+    found = {m.group(1): float(m.group(2)) for m in re.finditer(
+        r"^\s*(User|System) time \(seconds\): ([\d.]+)$", log_text, re.MULTILINE)}
+    return found["User"] + found["System"] if len(found) == 2 else None
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("log", type=Path)
     parser.add_argument("--root", type=Path, default=Path("."))
     args = parser.parse_args()
-    jobs = jobs_of(args.log.read_text())
+    log_text = args.log.read_text()
+    jobs = jobs_of(log_text)
     if not jobs:
         raise SystemExit(f"{args.log}: no finished job found (is it a Snakemake log?)")
     total, count = collections.defaultdict(float), collections.Counter()
@@ -85,6 +97,10 @@ def main() -> None:
         share = 1.0 - runs / sum(total.values())
         print(f"coupled runs (their time loops, as the batches logged them): {runs:.0f} s; "
               f"everything else {100 * share:.0f} % of the sum of job wall times")
+        cpu = cpu_seconds(log_text)
+        if cpu:
+            print(f"CPU (user + system, /usr/bin/time): {cpu:.0f} s; everything but the coupled "
+                  f"runs {100 * (1.0 - runs / cpu):.1f} % of it")
 
 
 if __name__ == "__main__":
