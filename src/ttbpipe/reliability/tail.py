@@ -270,6 +270,20 @@ def _shape_nll(kind, x, a, above, e, xi_min, first, lsig, xi):
 
 
 @kernel
+def _gumbel_log_y(lp):
+    """log y with y = -log(1 - p), p = e^lp < 1: the GEV's quantile term (``from_logp``)."""
+    return np.log(-np.log1p(-np.exp(lp)))
+
+
+@kernel
+def _gev_profile_nll(x, a, above, e, xi_min, z, big_l, lsig, xi):
+    """The GEV's negative log-likelihood at (log sigma, xi) with mu set so that P(X > z) = p
+    (``big_l`` = :func:`_gumbel_log_y` of log p; the models' ``from_logp``)."""
+    ratio = -big_l if abs(xi) < _XI_ZERO else np.expm1(-xi * big_l) / xi
+    return _shape_nll(_KIND_GEV, x, a, above, e, xi_min, z - np.exp(lsig) * ratio, lsig, xi)
+
+
+@kernel
 def _objective(kind, x, a, above, e, xi_min, u, lp, z, v):
     """The objective ``kind`` at ``v``: a model's negative log-likelihood (theta = v), or its
     profile at ``log p = lp`` of exceeding ``z`` (v the free parameters; the models'
@@ -282,10 +296,9 @@ def _objective(kind, x, a, above, e, xi_min, u, lp, z, v):
         xi = v[1]
         if not (xi > _XI_ZERO and lp < 0.0 and z > u):
             return np.inf
-        big_l = np.log(-np.log1p(-np.exp(lp)))
+        big_l = _gumbel_log_y(lp)
         lsig = np.log(xi * (z - u)) + xi * big_l + np.exp(v[0])
-        ratio = np.expm1(-xi * big_l) / xi
-        return _shape_nll(_KIND_GEV, x, a, above, e, xi_min, z - np.exp(lsig) * ratio, lsig, xi)
+        return _gev_profile_nll(x, a, above, e, xi_min, z, big_l, lsig, xi)
     if kind < _PROFILE:
         return _shape_nll(kind, x, a, above, e, xi_min, v[0], v[1], v[2])
     base = kind - _PROFILE
@@ -300,12 +313,10 @@ def _objective(kind, x, a, above, e, xi_min, u, lp, z, v):
         return _shape_nll(base, x, a, above, e, xi_min, eta, lsig, xi)
     if not lp < 0.0:
         return np.inf
-    big_l = np.log(-np.log1p(-np.exp(lp)))
+    big_l = _gumbel_log_y(lp)
     if base == _KIND_GUMBEL:
         return _gev_nll(x, a, z + np.exp(lsig) * big_l, lsig, 0.0)
-    xi = v[1]
-    ratio = -big_l if abs(xi) < _XI_ZERO else np.expm1(-xi * big_l) / xi
-    return _shape_nll(base, x, a, above, e, xi_min, z - np.exp(lsig) * ratio, lsig, xi)
+    return _gev_profile_nll(x, a, above, e, xi_min, z, big_l, lsig, v[1])
 
 
 @kernel
