@@ -43,7 +43,7 @@ from ttbpipe.stats.limits import ConstantLimit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_reliability_tail import (_gev_nll_at, _nested_profile_interval,  # noqa: E402
-                                   _reference_profile_ends)
+                                   _profile_interval_recorder, _reference_profile_ends)
 
 
 def log_difference(got: float, ref: float) -> float:
@@ -105,17 +105,10 @@ def recorded_profile_intervals(results: Path, configfile: Path) -> list[dict]:
     import ttbpipe.reliability.tail as tail
     from ttbpipe.stats.reliability import assess_limits
 
-    calls = []
+    calls: list[dict] = []
     profile_interval = tail._profile_interval
-
-    def record(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
-        ends = profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
-        calls.append(dict(model=model, z=z, lp_hat=lp_hat, free_hat=np.asarray(free_hat, float),
-                          nll_hat=nll_hat, cutoff=cutoff, ends=ends))
-        return ends
-
     extremes, limits, context, settings = study_limits(results, configfile)
-    tail._profile_interval = record
+    tail._profile_interval = _profile_interval_recorder(profile_interval, calls)
     try:
         assess_limits(extremes, limits, context, settings, workers=1)
     finally:

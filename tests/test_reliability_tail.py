@@ -735,20 +735,28 @@ def _weighted_far_limit_case(xi, distance, seed):
     return x, float(np.median(x) + distance * np.std(x)), rng.lognormal(0.0, 0.5, 60)
 
 
-def _record_profile_interval(monkeypatch) -> dict:
-    """The arguments of the next tail._profile_interval call (the model, the standardised limit,
-    the estimate, its maximum likelihood and the cutoff the code used), filled in as it runs."""
+def _profile_interval_recorder(profile_interval, calls: list):
+    """``profile_interval`` (tail._profile_interval) that appends each call's arguments and
+    result to ``calls``: the model, the standardised limit, the estimate (log p and the free
+    parameters), its maximum likelihood, the cutoff the code used and the ends it found."""
+    def record(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
+        ends = profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
+        calls.append(dict(model=model, z=z, lp_hat=lp_hat, free_hat=np.asarray(free_hat, float),
+                          nll_hat=nll_hat, cutoff=cutoff, ends=ends))
+        return ends
+
+    return record
+
+
+def _record_profile_interval(monkeypatch) -> list:
+    """The tail._profile_interval calls of what runs next, each appended as it runs
+    (:func:`_profile_interval_recorder`)."""
     import ttbpipe.reliability.tail as tail
 
-    used = {}
-    profile_interval = tail._profile_interval
-
-    def record(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top):
-        used.update(model=model, z=z, lp_hat=lp_hat, nll_hat=nll_hat, cutoff=cutoff)
-        return profile_interval(model, z, lp_hat, free_hat, nll_hat, cutoff, var_lp, lp_top)
-
-    monkeypatch.setattr(tail, "_profile_interval", record)
-    return used
+    calls: list = []
+    monkeypatch.setattr(tail, "_profile_interval",
+                        _profile_interval_recorder(tail._profile_interval, calls))
+    return calls
 
 
 @pytest.mark.parametrize("xi, distance, seed", [(0.6, 3000, 1), (0.3, 30, 3), (0.0, 10, 4)])
@@ -759,8 +767,9 @@ def test_weighted_profile_interval_equals_the_multistart_reference(xi, distance,
     from tail._profile_interval): what is checked here is the profile search, the sandwich
     ratio has its own tests (test_importance_weights_recover_target_tail)."""
     x, limit, weights = _weighted_far_limit_case(xi, distance, seed)
-    used = _record_profile_interval(monkeypatch)
+    calls = _record_profile_interval(monkeypatch)
     est = estimate_tail(x, limit, weights=weights, settings=FAST)
+    used = calls[-1]
     assert "sandwich-adjusted" in est.method and est.probability > 0
     _, low_ref, high_ref = _reference_profile_ends(x, limit, FAST, weights, used["cutoff"])
     _assert_ends_match(est, low_ref, high_ref)
@@ -778,8 +787,9 @@ def test_weighted_and_zero_estimate_intervals_equal_the_nested_reference(x, limi
     reference given the standardised data, weights, limit, maximum likelihood and
     (sandwich-scaled) cutoff the code used, captured from tail._profile_interval: a second
     method for what the multi-start reference checks in the tests above."""
-    used = _record_profile_interval(monkeypatch)
+    calls = _record_profile_interval(monkeypatch)
     est = estimate_tail(x, limit, weights=weights, settings=FAST)
+    used = calls[-1]
     assert (est.probability == 0.0) == (weights is None)
     model = used["model"]
     low_ref, high_ref = _nested_profile_interval(
