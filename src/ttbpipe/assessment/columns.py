@@ -22,6 +22,7 @@ engineer groups the checks; :func:`section_of` is its home.
 
 from __future__ import annotations
 
+import logging
 import re
 from dataclasses import dataclass
 from typing import Any, Iterable, Mapping
@@ -30,6 +31,8 @@ import numpy as np
 import pandas as pd
 
 from ..stats.schema import UNIT_SUFFIXES
+
+log = logging.getLogger(__name__)
 
 #: Unit suffixes an index name may end with, longest first: the results schema's.
 _SUFFIXES = tuple(suffix for suffix, _ in UNIT_SUFFIXES)
@@ -150,6 +153,33 @@ def row_metadata(table: pd.DataFrame | Iterable[Mapping[str, Any]]) -> list[dict
     keeps them in its batches' provenance."""
     keys = ("profile", "index", "clause", "category", "unit", "limit_source", "standard")
     return [{k: r[k] for k in keys} for r in _records(table)]
+
+
+def shared_row_metadata(candidates: Iterable[tuple[str, Iterable[Mapping[str, str]] | None]]
+                        ) -> list[dict[str, str]]:
+    """The :func:`row_metadata` that a study's samples share: the first non-empty of
+    ``candidates`` ``(origin, metadata)`` (a sample, a batch file). The profiles word each limit
+    source as the rule, with the sample's own values (its static load, speed, span) in the row's
+    notes and in the limit column, so every sample gives the same records; a candidate that
+    differs is logged with both origins (the first is kept), not silently replaced."""
+    first_origin, first = None, None
+    for origin, meta in candidates:
+        if not meta:
+            continue
+        meta = [dict(m) for m in meta]
+        if first is None:
+            first_origin, first = origin, meta
+            continue
+        known = {(m["profile"], m["index"]): m for m in first}
+        for m in meta:
+            ref = known.get((m["profile"], m["index"]))
+            if ref is not None and ref != m:
+                fields = [k for k in m if m[k] != ref.get(k)]
+                log.warning("assessment metadata of %s %s differs between %s and %s (%s: %r, "
+                            "%r); the report keeps the first", m["profile"], m["index"],
+                            first_origin, origin, ", ".join(fields),
+                            ref.get(fields[0]), m[fields[0]])
+    return first or []
 
 
 def assessed_indices(columns: Iterable[str], metadata: Iterable[Mapping[str, str]] = ()

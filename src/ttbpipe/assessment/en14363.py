@@ -73,6 +73,13 @@ SUM_Y_Q0_FACTOR = 2.0 / 3.0
 QMAX_OFFSET_N = 90e3
 QMAX_CAP_N = ((160.0, 200e3), (200.0, 190e3), (250.0, 180e3), (300.0, 170e3), (math.inf, 160e3))
 
+#: The rule of Q_lim (the run's Q0 and speed cap go to the row's notes: a study's samples share
+#: one limit source).
+_Q_MAX_SOURCE = ("90 kN + Q0, at most " + " / ".join(f"{v / 1e3:g}" for _, v in QMAX_CAP_N)
+                 + " kN for V <= " + " / ".join(f"{u:g}" for u, _ in QMAX_CAP_N[:-1])
+                 + f" / > {QMAX_CAP_N[-2][0]:g} km/h [M: UIC 518 / EN 14363:2005 table, not "
+                 "re-read]")
+
 _SOURCE = ("GENSYS course notes on UIC 518 / EN 14363 post-processing "
            "(gensys.se/course/UIC518_tests.html) [V]; statistics without the filter's settling "
            "time at each end")
@@ -137,28 +144,30 @@ def evaluate(run: RunData, options) -> list[Row]:
     rows.append(Row(
         "running safety, assessment quantity (sum Y)2m (track shift force)", "sum_Y_2m_N", "N",
         "wheelset", run.wheelsets[i], v, lim,
-        f"alpha (10 kN + 2 Q0/3), alpha = {float(options['alpha']):g}, Q0 = {q0_ws[i]:.0f} N "
-        "static wheel force of the wheelset (standards.md) [M]",
+        f"alpha (10 kN + 2 Q0/3), alpha = {float(options['alpha']):g}, Q0 the static wheel "
+        "force of the wheelset (standards.md) [M]",
         raw_index="max_lateral_wheelset_force_N", raw_value=run.raw("max_lateral_wheelset_force_N"),
         window_m=window, step_m=step, statistic=f"max(|F1|, |F2|), F1 = {lo:g} %, F2 = {hi:g} %",
-        notes="sum Y = Y_left + Y_right (the table's H); " + _SOURCE,
+        notes=(f"Q0 = {q0_ws[i]:.0f} N; sum Y = Y_left + Y_right (the table's H); " + _SOURCE),
     ).with_filter(filt))
 
     q0 = run.wheel_static_N
     if options["q_lim_N"] is None:
         q_lim = q_max_limit_N(q0, run.speed_kmh)
-        q_src = (f"90 kN + Q0, at most {q_max_cap_N(run.speed_kmh) / 1e3:g} kN at "
-                 f"{run.speed_kmh:g} km/h [M: UIC 518 / EN 14363:2005 table, not re-read]")
+        q_src = _Q_MAX_SOURCE
     else:
         q_lim = np.full(q0.shape, float(options["q_lim_N"]))
         q_src = "configured (option q_lim_N)"
     qmax = np.atleast_1d(percentile(P, hi))
     i, v, lim = governing(qmax, q_lim, run.wheel_labels)
+    q_note = ("" if options["q_lim_N"] is not None else
+              f"Q0 = {q0[i]:.0f} N, at most {q_max_cap_N(run.speed_kmh) / 1e3:g} kN at "
+              f"{run.speed_kmh:g} km/h; ")
     rows.append(Row(
         "track loading, assessment quantity Q (maximum vertical wheel force)", "Q_max_N", "N",
         "wheel", run.wheel_labels[i], v, lim, q_src,
         raw_index="max_wheel_vertical_force_N", raw_value=run.raw("max_wheel_vertical_force_N"),
-        statistic=f"F2 = {hi:g} % percentile", notes=_SOURCE,
+        statistic=f"F2 = {hi:g} % percentile", notes=q_note + _SOURCE,
     ).with_filter(filt))
 
     # quasi-static values: over each wheel's time on curves where the run has any, else the run

@@ -57,6 +57,13 @@ MIN_CUTOFF_HZ = 30.0
 F0_FACTOR = 1.5
 #: A2.4.4.2.2 deck twist limits (m over 3 m) by speed: (upper speed km/h, limit) [V].
 TWIST_LIMITS_M = ((120.0, 4.5e-3), (200.0, 3.0e-3), (math.inf, 1.5e-3))
+#: The rule of the twist limit (the run's speed and limit go to the row's notes: a study's
+#: samples share one limit source).
+_TWIST_SOURCE = (" / ".join(f"{t * 1e3:g}" for _, t in TWIST_LIMITS_M)
+                 + f" mm over {TWIST_BASE_M:g} m for V <= {TWIST_LIMITS_M[0][0]:g} / "
+                 + " / ".join(f"{a:g}-{b:g}" for (a, _), (b, _) in
+                              zip(TWIST_LIMITS_M[:-2], TWIST_LIMITS_M[1:-1]))
+                 + f" / > {TWIST_LIMITS_M[-2][0]:g} km/h (EN 1990 A2 A2.4.4.2.2) [V]")
 #: A2.4.4.2.3 vertical deflection limit L / DEFLECTION_RATIO [V].
 DEFLECTION_RATIO = 600.0
 #: A2.4.4.3.1 comfort levels of the in-coach vertical acceleration b_v (m/s^2) [V].
@@ -196,10 +203,10 @@ def evaluate(run: RunData, options) -> list[Row]:
         i, v, lim = governing(t_max, t_lim, names)
         rows.append(Row(
             "A2.4.4.2.2 (deck twist over 3 m)", "deck_twist_m", "m", "section", names[i], v, lim,
-            f"{lim * 1e3:g} mm over {TWIST_BASE_M:g} m at {run.speed_kmh:g} km/h (4.5 / 3.0 / 1.5 mm "
-            "for V <= 120 / 120-200 / > 200 km/h) [V]",
+            _TWIST_SOURCE,
             raw_value=v, window_m=TWIST_BASE_M, statistic="largest |t| over the run",
-            notes=("t = (z_left - z_right)(x) - (z_left - z_right)(x + 3 m) of the rails (no "
+            notes=(f"{lim * 1e3:g} mm at {run.speed_kmh:g} km/h; "
+                   "t = (z_left - z_right)(x) - (z_left - z_right)(x + 3 m) of the rails (no "
                    "processing: raw_value = processed); under the simulated train, not LM71"),
         ))
     else:
@@ -211,12 +218,12 @@ def evaluate(run: RunData, options) -> list[Row]:
         i, v, lim = governing(delta, lengths / DEFLECTION_RATIO, labels)
         rows.append(Row(
             "A2.4.4.2.3 (vertical deflection)", "vertical_deflection_m", "m", "span", labels[i],
-            v, lim, f"L/{DEFLECTION_RATIO:g} with L = {lengths[i]:g} m, under LM71 in the "
+            v, lim, f"L/{DEFLECTION_RATIO:g} with L the span's length, under LM71 in the "
             "standard [V]",
             raw_index="max_girder_vertical_disp_m", raw_value=run.raw("max_girder_vertical_disp_m"),
             statistic="largest |midspan deflection| over the run",
-            notes=("under the simulated train, not under LM71 (x dynamic factor) as A2.4.4.2.3 "
-                   "asks: not the code check"),
+            notes=(f"L = {lengths[i]:g} m; under the simulated train, not under LM71 (x dynamic "
+                   "factor) as A2.4.4.2.3 asks: not the code check"),
         ))
         ratio = lengths / np.maximum(delta, 1e-12)
         j = int(np.argmin(ratio))

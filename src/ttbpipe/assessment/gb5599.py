@@ -129,10 +129,11 @@ def evaluate(run: RunData, options) -> list[Row]:
     rows.append(Row(
         "9 (assessment index: wheel unloading ratio), 10 and Appendix D (data processing)",
         "wheel_unloading_ratio", "1", "wheel", run.wheel_labels[i], v, lim,
-        f"{lim_u.source}; {run.speed_kmh:g} km/h",
+        lim_u.source,
         raw_index="max_wheel_unloading_ratio", raw_value=run.raw("max_wheel_unloading_ratio"),
         window_m=seg, statistic=stat,
-        notes="(P0 - P)/P0 from the filtered P, P0 the static wheel load; 1 off the rail",
+        notes=(f"{lim:g} at {run.speed_kmh:g} km/h; (P0 - P)/P0 from the filtered P, P0 the "
+               "static wheel load; 1 off the rail"),
     ).with_filter(filt))
 
     H = np.abs(run.filtered(filt, "H_N")[keep])
@@ -144,10 +145,11 @@ def evaluate(run: RunData, options) -> list[Row]:
     rows.append(Row(
         "9 (assessment index: lateral wheelset force), 10 and Appendix D (data processing)",
         "lateral_wheelset_force_H_N", "N", "wheelset", run.wheelsets[i], v, lim,
-        f"{lim_h.constant / 1e3:g} kN + P0/{lim_h.divisor:g}, P0 = {axle[i]:.0f} N static axle "
-        f"load ({lim_h.source})",
+        f"{lim_h.constant / 1e3:g} kN + P0/{lim_h.divisor:g}, P0 the static axle load of the "
+        f"wheelset ({lim_h.source})",
         raw_index="max_lateral_wheelset_force_N", raw_value=run.raw("max_lateral_wheelset_force_N"),
-        window_m=seg, statistic=stat, notes="H = Q_left + Q_right from the filtered forces",
+        window_m=seg, statistic=stat,
+        notes=f"P0 = {axle[i]:.0f} N; H = Q_left + Q_right from the filtered forces",
     ).with_filter(filt))
 
     band = carbody_filter(options)

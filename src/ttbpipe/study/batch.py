@@ -32,6 +32,7 @@ import pandas as pd
 from ..io import write_table
 from ..memory import reuse_freed_memory
 from ..threads import WORKER_ENV
+from ..assessment.columns import shared_row_metadata
 from ..assessment.study import resolve_assessment, with_span_frequencies
 from .samples import ASSESSMENT_ROWS_KEY, resolve_simulation, run_sample
 
@@ -164,7 +165,9 @@ def run_batch(rows: pd.DataFrame, config: Mapping[str, Any], profiles: Mapping[s
         raise ValueError(f"simulation.executor: {executor!r}; expected local | dask")
     rows_meta = [r[0].pop(ASSESSMENT_ROWS_KEY, None) for r in results]
     if metadata is not None:
-        metadata.extend(next((m for m in rows_meta if m), []))
+        metadata.extend(shared_row_metadata(
+            (f"sample {r[0]['scenario']}/{r[0]['sample_index']}", m)
+            for r, m in zip(results, rows_meta)))
     extremes = pd.DataFrame([r[0] for r in results])
     extremes["scenario"] = extremes["scenario"].astype("string")
     extremes["seed_entropy"] = extremes["seed_entropy"].astype("string")

@@ -52,7 +52,7 @@ from .. import io
 from ..parallel import process_map
 from ..dates import DATE_PATTERN
 from ..stats import plots, streaming, tables
-from ..assessment.columns import assessed_indices
+from ..assessment.columns import assessed_indices, shared_row_metadata
 from ..stats.limits import limits_from_config
 from ..stats.reliability import ReliabilitySettings, assess_limits, convergence_curve
 from ..stats.schema import RESPONSE_INDICES
@@ -276,12 +276,10 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
 
 def _assessment_metadata(paths: Sequence[str | os.PathLike[str]]) -> list[dict]:
     """The assessed rows' metadata (clause, category, limit source) of the batches' provenance
-    (:func:`ttbpipe.study.batch.simulate_batch` keeps it there): the first batch that has it."""
-    for path in paths:
-        meta = io.read_provenance(path).get("assessment")
-        if meta:
-            return list(meta)
-    return []
+    (:func:`ttbpipe.study.batch.simulate_batch` keeps it there), the same in every batch
+    (:func:`~ttbpipe.assessment.columns.shared_row_metadata` logs any that differs)."""
+    return shared_row_metadata((str(path), io.read_provenance(path).get("assessment"))
+                               for path in paths)
 
 
 def _utilisation_figure_tasks(extremes, indices, folder: Path) -> list[tuple]:
