@@ -82,7 +82,7 @@ mkdir -p "$CHECK_DIR"
 SUMMARY=$CHECK_DIR/summary.txt
 : > "$SUMMARY"
 record() { echo "$*" | tee -a "$SUMMARY"; }
-record "slurm_check $(date -u +%FT%TZ) on $(hostname -s) ($(nproc) CPUs), $(sinfo --version), code $(cd "$REPO" && git rev-parse --short HEAD)$(cd "$REPO" && git diff --quiet HEAD || echo '+dirty')"
+record "slurm_check $(date -u +%FT%TZ) on $(hostname -s) ($(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc) CPUs), $(sinfo --version), code $(cd "$REPO" && git rev-parse --short HEAD)$(cd "$REPO" && git diff --quiet HEAD || echo '+dirty')"
 
 # --- 1. local reference ------------------------------------------------------------------------
 copy_checkout "$CHECK_DIR/local"
