@@ -75,11 +75,14 @@ def test_differing_metadata_is_logged_with_both_origins_and_the_first_kept(caplo
     other = [dict(m) for m in first]
     other[1]["limit_source"] = "another wording"
     with caplog.at_level(logging.WARNING, logger="ttbpipe.assessment.columns"):
-        kept = shared_row_metadata([("batch A", None), ("batch B", first), ("batch C", other)])
+        kept = shared_row_metadata([("batch A", None), ("batch B", first), ("batch C", other),
+                                    ("batch D", first), ("batch E", other), ("batch F", other)])
     assert kept == first
-    [record] = [r for r in caplog.records if r.name == "ttbpipe.assessment.columns"]
-    assert "batch B" in record.getMessage() and "batch C" in record.getMessage()
-    assert "limit_source" in record.getMessage() and first[1]["index"] in record.getMessage()
+    [record] = [r for r in caplog.records if r.name == "ttbpipe.assessment.columns"]  # one per index
+    message = record.getMessage()
+    assert "batch B" in message and "batch C and 2 more" in message
+    assert "limit_source" in message and first[1]["index"] in message
+    assert "another wording" in message
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="ttbpipe.assessment.columns"):
         assert shared_row_metadata([("batch B", first), ("batch C", first)]) == first

@@ -160,25 +160,32 @@ def shared_row_metadata(candidates: Iterable[tuple[str, Iterable[Mapping[str, st
     """The :func:`row_metadata` that a study's samples share: the first non-empty of
     ``candidates`` ``(origin, metadata)`` (a sample, a batch file). The profiles word each limit
     source as the rule, with the sample's own values (its static load, speed, span) in the row's
-    notes and in the limit column, so every sample gives the same records; a candidate that
-    differs is logged with both origins (the first is kept), not silently replaced."""
-    first_origin, first = None, None
+    notes and in the limit column, so every sample gives the same records. Where later
+    candidates differ, one warning per index names the first origin, the first that differs and
+    how many do (the first is kept), so nothing is replaced silently."""
+    first_origin, first, known = None, None, {}
+    differing: dict[tuple[str, str], list] = {}     # index -> [origin, field, value, count]
     for origin, meta in candidates:
         if not meta:
             continue
         meta = [dict(m) for m in meta]
         if first is None:
             first_origin, first = origin, meta
+            known = {(m["profile"], m["index"]): m for m in first}
             continue
-        known = {(m["profile"], m["index"]): m for m in first}
         for m in meta:
-            ref = known.get((m["profile"], m["index"]))
+            key = (m["profile"], m["index"])
+            ref = known.get(key)
             if ref is not None and ref != m:
-                fields = [k for k in m if m[k] != ref.get(k)]
-                log.warning("assessment metadata of %s %s differs between %s and %s (%s: %r, "
-                            "%r); the report keeps the first", m["profile"], m["index"],
-                            first_origin, origin, ", ".join(fields),
-                            ref.get(fields[0]), m[fields[0]])
+                if key not in differing:
+                    field = next(k for k in m if m[k] != ref.get(k))
+                    differing[key] = [origin, field, m[field], 0]
+                differing[key][3] += 1
+    for (profile, index), (origin, field, value, count) in differing.items():
+        log.warning("assessment metadata of %s %s differs between %s and %s%s (%s: %r, %r); the "
+                    "report keeps the first", profile, index, first_origin, origin,
+                    f" and {count - 1} more" if count > 1 else "", field,
+                    known[(profile, index)].get(field), value)
     return first or []
 
 
