@@ -12,7 +12,8 @@ This test checks that exit status and reads the job counts Slurm saw from the ch
 
 It needs root, Debian's ``slurm-wlm``, ``munge``, ``slurmdbd`` and ``mariadb-server`` and the
 ``cluster`` extra, and takes about 4 minutes; without them it is skipped with the reason.
-``TTBPIPE_SKIP_SLURM_CHECK=1`` skips it, ``-m "not cluster"`` deselects it.
+``TTBPIPE_SKIP_SLURM_CHECK=1`` skips it; ``-m "not cluster and not validation"`` deselects it (a
+command-line ``-m`` replaces the default ``-m "not validation"``).
 """
 
 from __future__ import annotations
