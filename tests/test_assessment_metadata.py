@@ -88,3 +88,14 @@ def test_differing_metadata_is_logged_with_both_origins_and_the_first_kept(caplo
         assert shared_row_metadata([("batch B", first), ("batch C", first)]) == first
     assert not [r for r in caplog.records if r.name == "ttbpipe.assessment.columns"]
     assert shared_row_metadata([("batch A", None), ("batch B", [])]) == []
+
+
+def test_metadata_with_other_keys_is_reported_not_a_crash(caplog):
+    """A record that lacks a key the first one has (or adds one) differs too."""
+    first = row_metadata(assessed(*RUN_A, "gb5599"))
+    other = [dict(m) for m in first]
+    del other[0]["standard"]
+    with caplog.at_level(logging.WARNING, logger="ttbpipe.assessment.columns"):
+        assert shared_row_metadata([("batch B", first), ("batch C", other)]) == first
+    [record] = [r for r in caplog.records if r.name == "ttbpipe.assessment.columns"]
+    assert "standard" in record.getMessage() and "batch C" in record.getMessage()

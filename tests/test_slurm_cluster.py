@@ -47,8 +47,11 @@ def _missing() -> list[str]:
     return missing
 
 
+MISSING = _missing()
+
+
 @pytest.mark.cluster
-@pytest.mark.skipif(bool(_missing()), reason="one-node Slurm check needs: " + ", ".join(_missing()))
+@pytest.mark.skipif(bool(MISSING), reason="one-node Slurm check needs: " + ", ".join(MISSING))
 def test_slurm_profile_and_dask_on_slurm_match_the_local_run(tmp_path):
     check_dir = tmp_path / "slurm-check"
     proc = subprocess.run(

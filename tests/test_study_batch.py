@@ -268,7 +268,9 @@ def test_aggregation_refuses_stale_and_unreadable_batches(reference, tmp_path):
     paths = batch_paths(str(tmp_path), "C2", 0, 1)
     simulate_batch(batch_rows(design, "C2", 0, 1), CONFIG, {}, *paths, scenario="C2", first=0,
                    last=1, settings=settings, settings_digest=settings_digest(settings))
-    verify_batches(paths, design[design["sample_index"] <= 1], {"C2": settings})
+    documents = verify_batches(paths, design[design["sample_index"] <= 1], {"C2": settings})
+    assert set(documents) == set(map(str, paths))       # each provenance, read once, returned
+    assert all(d == read_provenance(p) for p, d in documents.items())
 
     changed = copy.deepcopy(settings)
     changed["simulation"]["deck_filter_hz"] = 25.0

@@ -113,6 +113,22 @@ FLOAT_COLUMNS = ("processed_value", "raw_value", "limit", "utilisation", "filter
                  "filter_high_hz", "filter_order", "window_m", "step_m")
 
 
+def speed_band_value(bands: tuple[tuple[float, float], ...], speed_kmh: float) -> float:
+    """The value of the speed band ``speed_kmh`` falls in: ``bands`` are ``(upper speed km/h,
+    value)`` in increasing speed, the last with an infinite upper speed (a standard's table)."""
+    return next(value for upper, value in bands if speed_kmh <= upper + 1e-9)
+
+
+def speed_bands_text(bands: tuple[tuple[float, float], ...], scale: float, unit: str) -> str:
+    """A band table in words, as a limit source: ``4.5 / 3 / 1.5 mm for V <= 120 / 120-200 /
+    > 200 km/h`` (values times ``scale`` in ``unit``)."""
+    uppers = [upper for upper, _ in bands[:-1]]
+    ranges = [f"<= {uppers[0]:g}", *(f"{a:g}-{b:g}" for a, b in zip(uppers, uppers[1:])),
+              f"> {uppers[-1]:g}"]
+    return (" / ".join(f"{value * scale:g}" for _, value in bands) + f" {unit} for V "
+            + " / ".join(ranges) + " km/h")
+
+
 def rows_to_records(profile: Profile, rows: list[Row]) -> list[dict[str, Any]]:
     """The result records of one profile (keys :data:`COLUMNS`, numbers as floats): the rows
     of :func:`rows_to_frame` without the DataFrame, for code that reads a few fields of every

@@ -178,8 +178,8 @@ def shared_row_metadata(candidates: Iterable[tuple[str, Iterable[Mapping[str, st
             ref = known.get(key)
             if ref is not None and ref != m:
                 if key not in differing:
-                    field = next(k for k in m if m[k] != ref.get(k))
-                    differing[key] = [origin, field, m[field], 0]
+                    field = next(k for k in {**ref, **m} if m.get(k) != ref.get(k))
+                    differing[key] = [origin, field, m.get(field), 0]
                 differing[key][3] += 1
     for (profile, index), (origin, field, value, count) in differing.items():
         log.warning("assessment metadata of %s %s differs between %s and %s%s (%s: %r, %r); the "

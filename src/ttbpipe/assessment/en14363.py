@@ -41,7 +41,7 @@ import math
 
 import numpy as np
 
-from .base import Profile, Row, governing
+from .base import Profile, Row, governing, speed_band_value, speed_bands_text
 from .processing import Butterworth, percentile, percentile_where, sliding_mean
 from .run import RunData
 from .track import RadiusRange, governing_by_radius, split_by_radius
@@ -75,7 +75,10 @@ QMAX_CAP_N = ((160.0, 200e3), (200.0, 190e3), (250.0, 180e3), (300.0, 170e3), (m
 
 #: The rule of Q_lim (the run's Q0 and speed cap go to the row's notes: a study's samples share
 #: one limit source).
-_Q_MAX_SOURCE = ("90 kN + Q0, at most " + " / ".join(f"{v / 1e3:g}" for _, v in QMAX_CAP_N)
+_Q_MAX_SOURCE = (f"90 kN + Q0, at most {speed_bands_text(QMAX_CAP_N, 1e-3, 'kN')} [M: UIC 518 / "
+                 "EN 14363:2005 table, not re-read]")
+
+_SOURCE = ("90 kN + Q0, at most " + " / ".join(f"{v / 1e3:g}" for _, v in QMAX_CAP_N)
                  + " kN for V <= " + " / ".join(f"{u:g}" for u, _ in QMAX_CAP_N[:-1])
                  + f" / > {QMAX_CAP_N[-2][0]:g} km/h [M: UIC 518 / EN 14363:2005 table, not "
                  "re-read]")
@@ -92,7 +95,7 @@ def sum_y_limit_N(q0_N: np.ndarray | float, alpha: float) -> np.ndarray | float:
 
 def q_max_cap_N(speed_kmh: float) -> float:
     """The speed's maximum of Q_lim (:data:`QMAX_CAP_N`)."""
-    return next(value for upper, value in QMAX_CAP_N if speed_kmh <= upper + 1e-9)
+    return speed_band_value(QMAX_CAP_N, speed_kmh)
 
 
 def q_max_limit_N(q0_N: np.ndarray | float, speed_kmh: float) -> np.ndarray | float:
@@ -155,14 +158,13 @@ def evaluate(run: RunData, options) -> list[Row]:
     if options["q_lim_N"] is None:
         q_lim = q_max_limit_N(q0, run.speed_kmh)
         q_src = _Q_MAX_SOURCE
+        q_cap = f", at most {q_max_cap_N(run.speed_kmh) / 1e3:g} kN at {run.speed_kmh:g} km/h; "
     else:
         q_lim = np.full(q0.shape, float(options["q_lim_N"]))
-        q_src = "configured (option q_lim_N)"
+        q_src, q_cap = "configured (option q_lim_N)", None
     qmax = np.atleast_1d(percentile(P, hi))
     i, v, lim = governing(qmax, q_lim, run.wheel_labels)
-    q_note = ("" if options["q_lim_N"] is not None else
-              f"Q0 = {q0[i]:.0f} N, at most {q_max_cap_N(run.speed_kmh) / 1e3:g} kN at "
-              f"{run.speed_kmh:g} km/h; ")
+    q_note = "" if q_cap is None else f"Q0 = {q0[i]:.0f} N{q_cap}"
     rows.append(Row(
         "track loading, assessment quantity Q (maximum vertical wheel force)", "Q_max_N", "N",
         "wheel", run.wheel_labels[i], v, lim, q_src,

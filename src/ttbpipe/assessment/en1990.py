@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from ..stats.limits import DECK_VERTICAL_ACC_M_S2
-from .base import Profile, Row, governing
+from .base import Profile, Row, governing, speed_band_value, speed_bands_text
 from .modal import span_frequencies
 from .monitors import TWIST_BASE_M, TWIST_COLUMN
 from .processing import Butterworth
@@ -59,11 +59,8 @@ F0_FACTOR = 1.5
 TWIST_LIMITS_M = ((120.0, 4.5e-3), (200.0, 3.0e-3), (math.inf, 1.5e-3))
 #: The rule of the twist limit (the run's speed and limit go to the row's notes: a study's
 #: samples share one limit source).
-_TWIST_SOURCE = (" / ".join(f"{t * 1e3:g}" for _, t in TWIST_LIMITS_M)
-                 + f" mm over {TWIST_BASE_M:g} m for V <= {TWIST_LIMITS_M[0][0]:g} / "
-                 + " / ".join(f"{a:g}-{b:g}" for (a, _), (b, _) in
-                              zip(TWIST_LIMITS_M[:-2], TWIST_LIMITS_M[1:-1]))
-                 + f" / > {TWIST_LIMITS_M[-2][0]:g} km/h (EN 1990 A2 A2.4.4.2.2) [V]")
+_TWIST_SOURCE = (f"{speed_bands_text(TWIST_LIMITS_M, 1e3, 'mm')}, over {TWIST_BASE_M:g} m "
+                 "(EN 1990 A2 A2.4.4.2.2) [V]")
 #: A2.4.4.2.3 vertical deflection limit L / DEFLECTION_RATIO [V].
 DEFLECTION_RATIO = 600.0
 #: A2.4.4.3.1 comfort levels of the in-coach vertical acceleration b_v (m/s^2) [V].
@@ -91,7 +88,7 @@ def deck_filter(f0_hz: float, f3_hz: float, order: int = DEFAULTS["filter_order"
 
 
 def twist_limit_m(speed_kmh: float) -> float:
-    return next(lim for upper, lim in TWIST_LIMITS_M if speed_kmh <= upper + 1e-9)
+    return speed_band_value(TWIST_LIMITS_M, speed_kmh)
 
 
 def _spans(run: RunData, options, n_spans: int) -> list[tuple[float, float, float]]:

@@ -261,8 +261,9 @@ def _differences(old: Any, new: Any, path: str = "") -> list[str]:
 
 def verify_batches(paths: Sequence[str | os.PathLike[str]], design: pd.DataFrame,
                    settings: Mapping[str, Mapping[str, Any]], *,
-                   rerun_hint: str = "snakemake --cores 2 --forcerun") -> None:
-    """Check, before aggregating, that every batch file was made for the current study.
+                   rerun_hint: str = "snakemake --cores 2 --forcerun") -> dict[str, dict]:
+    """Check, before aggregating, that every batch file was made for the current study; returns
+    each file's provenance document by path (read once, for the aggregation's other uses).
 
     For each file: it can be read (a truncated or corrupt Parquet file fails here, not deep in
     pyarrow); its provenance names a scenario whose current settings (``settings[scenario]``,
@@ -278,6 +279,7 @@ def verify_batches(paths: Sequence[str | os.PathLike[str]], design: pd.DataFrame
     from .plan import settings_digest
 
     problems: list[tuple[str, str]] = []
+    documents: dict[str, dict] = {}
     design_index = {s: set(int(i) for i in g["sample_index"])
                     for s, g in design.groupby(design["scenario"].astype(str))}
     for path in map(str, paths):
@@ -291,6 +293,7 @@ def verify_batches(paths: Sequence[str | os.PathLike[str]], design: pd.DataFrame
             problems.append((path, f"unreadable ({type(exc).__name__}: {exc}): truncated or "
                                    "corrupt, e.g. by a job killed while copying or a full disk"))
             continue
+        documents[path] = doc
         scenario = str(doc.get("scenario"))
         current = settings.get(scenario)
         if current is None:
@@ -315,3 +318,4 @@ def verify_batches(paths: Sequence[str | os.PathLike[str]], design: pd.DataFrame
             f"{len(problems)} batch file(s) were not made by the current settings and code or "
             f"cannot be read, so they must not be aggregated:\n{lines}\n"
             f"Remake them: {rerun_hint} {files}")
+    return documents

@@ -188,12 +188,13 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
     paths = {name: out / relative for name, relative in STUDY_FILES.items()}
     written: dict[str, Path] = {}
     study = str((config.get("study") or {}).get("name", "study"))
+    provenance: dict[str, dict] = {}
     if settings is not None:
         if design is None:
             raise ValueError("checking the batches' provenance (settings=) needs their design")
         from .batch import verify_batches  # here: ttbpipe.study.batch imports the simulation
 
-        verify_batches([*extremes_paths, *history_paths], design, settings)
+        provenance = verify_batches([*extremes_paths, *history_paths], design, settings)
     extremes = streaming.read_extremes(extremes_paths)
     extremes = extremes.sort_values(["scenario", "sample_index"], kind="stable").reset_index(drop=True)
     if design is None:
@@ -211,7 +212,7 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
 
     section = config.get("limits")
     raw_limits, context = limits_from_config(section)
-    indices = assessed_indices(extremes.columns, _assessment_metadata(extremes_paths))
+    indices = assessed_indices(extremes.columns, _assessment_metadata(extremes_paths, provenance))
     limits = utilisation.assessed_limits(indices)
     if limits:   # the raw-peak thresholds stay in the table, marked as such
         raw_limits = [replace(lim, category="raw") for lim in raw_limits]
@@ -274,12 +275,16 @@ def aggregate_study(extremes_paths: Sequence[str | os.PathLike[str]],
     return written
 
 
-def _assessment_metadata(paths: Sequence[str | os.PathLike[str]]) -> list[dict]:
+def _assessment_metadata(paths: Sequence[str | os.PathLike[str]],
+                         provenance: Mapping[str, dict] | None = None) -> list[dict]:
     """The assessed rows' metadata (clause, category, limit source) of the batches' provenance
     (:func:`ttbpipe.study.batch.simulate_batch` keeps it there), the same in every batch
-    (:func:`~ttbpipe.assessment.columns.shared_row_metadata` logs any that differs)."""
-    return shared_row_metadata((str(path), io.read_provenance(path).get("assessment"))
-                               for path in paths)
+    (:func:`~ttbpipe.assessment.columns.shared_row_metadata` logs any that differs).
+    ``provenance``: the documents already read, by path (the rest are read here)."""
+    known = provenance or {}
+    return shared_row_metadata(
+        (str(path), (known.get(str(path)) or io.read_provenance(path)).get("assessment"))
+        for path in paths)
 
 
 def _utilisation_figure_tasks(extremes, indices, folder: Path) -> list[tuple]:
