@@ -78,11 +78,6 @@ QMAX_CAP_N = ((160.0, 200e3), (200.0, 190e3), (250.0, 180e3), (300.0, 170e3), (m
 _Q_MAX_SOURCE = (f"90 kN + Q0, at most {speed_bands_text(QMAX_CAP_N, 1e-3, 'kN')} [M: UIC 518 / "
                  "EN 14363:2005 table, not re-read]")
 
-_SOURCE = ("90 kN + Q0, at most " + " / ".join(f"{v / 1e3:g}" for _, v in QMAX_CAP_N)
-                 + " kN for V <= " + " / ".join(f"{u:g}" for u, _ in QMAX_CAP_N[:-1])
-                 + f" / > {QMAX_CAP_N[-2][0]:g} km/h [M: UIC 518 / EN 14363:2005 table, not "
-                 "re-read]")
-
 _SOURCE = ("GENSYS course notes on UIC 518 / EN 14363 post-processing "
            "(gensys.se/course/UIC518_tests.html) [V]; statistics without the filter's settling "
            "time at each end")

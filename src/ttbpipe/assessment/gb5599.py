@@ -124,7 +124,7 @@ def evaluate(run: RunData, options) -> list[Row]:
     unloading = np.where(run.in_contact[keep], (p0 - P) / p0, 1.0)
     value = np.atleast_1d(percentile(segment_maxima(x, unloading, seg)[1], pct))
     lim_u = limits["wheel_unloading_ratio"]
-    u_lim = lim_u.low if run.speed_kmh <= lim_u.speed_kmh + 1e-9 else lim_u.high
+    u_lim = float(lim_u.value_at(run.speed_kmh))
     i, v, lim = governing(value, u_lim, run.wheel_labels)
     rows.append(Row(
         "9 (assessment index: wheel unloading ratio), 10 and Appendix D (data processing)",

@@ -100,8 +100,13 @@ class SpeedDependentLimit:
             raise LimitNotEvaluable(
                 f"limit {self.name!r} depends on the train speed: write column train_speed_m_s "
                 "in the extremes tables or set limits.train_speed_kmh in the configuration")
+        return self.value_at(speed_kmh)
+
+    def value_at(self, speed_kmh: np.ndarray | float) -> np.ndarray:
+        """The limit at ``speed_kmh`` (km/h): ``low`` up to :attr:`speed_kmh`, ``high`` above."""
         # 1e-9 guards 160 km/h read back from m/s against rounding.
-        return np.where(speed_kmh <= self.speed_kmh + 1e-9, self.low, self.high)
+        return np.where(np.asarray(speed_kmh, dtype=float) <= self.speed_kmh + 1e-9, self.low,
+                        self.high)
 
     def threshold_text(self) -> str:
         return f"{self.low:g} (v <= {self.speed_kmh:g} km/h) / {self.high:g} above"
